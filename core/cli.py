@@ -1,0 +1,37 @@
+"""The ``ornitail`` console command: one subcommand group per area, no logic of its own."""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from ornitail.core.errors import UserInputError
+
+
+class _UserErrorsAsOneLine(click.Group):
+    """A click group that turns :class:`UserInputError` into one line on stderr and exit code 2."""
+
+    def invoke(self, ctx: click.Context):  # noqa: D102 - click override
+        try:
+            return super().invoke(ctx)
+        except UserInputError as error:
+            click.echo(f"ornitail: error: {error}", err=True)
+            sys.exit(2)
+
+
+@click.group(cls=_UserErrorsAsOneLine)
+@click.version_option(package_name="ornitail")
+def main() -> None:
+    """Wind-tunnel and free-flight tools for the tail of the DelFly II flapping-wing MAV."""
+
+
+def _register_area_commands() -> None:
+    from ornitail.calibration.cli import calibration_group
+    from ornitail.sim.cli import sim_group
+
+    main.add_command(calibration_group)
+    main.add_command(sim_group)
+
+
+_register_area_commands()

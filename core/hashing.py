@@ -1,0 +1,22 @@
+"""Content hashes that name the calibration and configuration files a recording used."""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+from ornitail.core.errors import UserInputError
+
+
+def content_hash_of_bytes(data: bytes) -> str:
+    """Return ``"sha256:<hex>"`` for ``data``."""
+    return "sha256:" + hashlib.sha256(data).hexdigest()
+
+
+def content_hash_of_file(path: str | Path) -> str:
+    """Return ``"sha256:<hex>"`` of the file's bytes; a missing file is a user error."""
+    path = Path(path)
+    try:
+        return content_hash_of_bytes(path.read_bytes())
+    except OSError as error:
+        raise UserInputError(str(path), f"cannot read file ({error.strerror or error})") from None

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Set up ornitail for development on a fresh Debian machine with Python 3.11:
+# system libraries the tests need (when missing), a virtualenv in .venv, and an editable install.
+# Sourced by demo.sh and test.sh; safe to run again (it only installs what is missing).
+set -euo pipefail
+repo_root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$repo_root"
+
+# Debian packages: python3-venv (venv on Debian's own Python) and the libraries offscreen Qt needs.
+system_packages=(libegl1 libgl1 libxkbcommon0 libfontconfig1 libglib2.0-0 libdbus-1-3)
+if ! python3 -c "import venv, ensurepip" >/dev/null 2>&1; then
+  system_packages+=(python3-venv)
+fi
+missing=()
+for package in "${system_packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" || missing+=("$package")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing system packages: ${missing[*]}"
+  apt_get=(apt-get)
+  [ "$(id -u)" -ne 0 ] && apt_get=(sudo apt-get)
+  "${apt_get[@]}" update -qq
+  DEBIAN_FRONTEND=noninteractive "${apt_get[@]}" install -y -qq "${missing[@]}" >/dev/null
+fi
+
+python_version_ok='import sys; sys.exit(0 if sys.version_info >= (3, 11) else 1)'
+if ! python3 -c "$python_version_ok"; then
+  echo "setup: ornitail needs Python 3.11 or newer; python3 is $(python3 --version)" >&2
+  exit 1
+fi
+
+if [ ! -x .venv/bin/python ]; then
+  echo "setup: creating .venv"
+  python3 -m venv .venv
+fi
+# Reinstall only when pyproject.toml changed since the last install.
+stamp=.venv/.ornitail-installed
+if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
+  echo "setup: installing ornitail and its dependencies into .venv"
+  .venv/bin/python -m pip install --quiet --upgrade pip 2>&1 | grep -v "is ignored" || true
+  .venv/bin/python -m pip install --quiet -e ".[test]" 2>&1 | grep -v "is ignored" || true
+  .venv/bin/python -c "import ornitail.core.cli" # fail here, not later, if the install did not work
+  touch "$stamp"
+fi
