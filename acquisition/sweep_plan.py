@@ -1,0 +1,369 @@
+"""Sweep plans: an explicit, checkable list of set points made from a TOML plan file.
+
+A plan names the configuration, the steady state (theta0, V0, f0), the one-variable sweeps about it, repeats, which
+points are also measured without the tail, wind-off tares, settle criteria and record length. :func:`load_plan`
+gives the list of :class:`SetPoint` a sweep will visit, in order, so the whole plan can be checked against
+the rig's limits, its duration estimated and a crashed run resumed at the first unfinished point before anything
+moves. The file format is in ``docs/sweep-plan.md``.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+from ornitail.core.errors import UserInputError
+
+SweepVariable = Literal["theta", "velocity", "frequency"]
+TaillessPoints = Literal["none", "steady_state", "all"]
+
+
+@dataclass(frozen=True)
+class SetPoint:
+    """One point of a sweep: where to go and what to record there.
+
+    Attributes
+    ----------
+    index : int
+        Position in the plan, from 0.
+    kind : {"tare", "measurement"}
+        A wind-off tare (fan and motor off) or a measurement.
+    sweep : str
+        ``"tare"``, ``"steady_state"``, ``"theta"``, ``"velocity"`` or ``"frequency"``.
+    tail_attached : bool
+        Whether the tail is on the vehicle.
+    pitch_rad : float
+        Strut pitch angle, radians.
+    tunnel_velocity_m_s : float
+        Free-stream velocity, m/s (0 for a tare).
+    flapping_frequency_hz : float
+        Flapping frequency, Hz (0 for a tare: motor off).
+    repeat : int
+        Repeat number of this set point, from 0.
+    record_s : float
+        Record length, seconds.
+    """
+
+    index: int
+    kind: Literal["tare", "measurement"]
+    sweep: str
+    tail_attached: bool
+    pitch_rad: float
+    tunnel_velocity_m_s: float
+    flapping_frequency_hz: float
+    repeat: int
+    record_s: float
+
+    @property
+    def label(self) -> str:
+        """Short human-readable description with units."""
+        tail = "tailed" if self.tail_attached else "tailless"
+        return (
+            f"#{self.index} {self.sweep} {tail} theta={math.degrees(self.pitch_rad):.2f} deg "
+            f"V={self.tunnel_velocity_m_s:.3f} m/s f={self.flapping_frequency_hz:.2f} Hz"
+        )
+
+    def as_record(self) -> dict[str, Any]:
+        """Plain JSON-serialisable dictionary of the set point."""
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class SettleCriteria:
+    """When a set point counts as reached.
+
+    Attributes
+    ----------
+    pitch_tolerance_rad, velocity_tolerance_m_s, frequency_tolerance_hz : float
+        Largest accepted distance of each reading from its set value.
+    stable_for_s : float
+        All readings must stay within tolerance for this long, seconds.
+    timeout_s : float
+        Give up on the point (and stop the sweep) after this long, seconds.
+    """
+
+    pitch_tolerance_rad: float = math.radians(0.2)
+    velocity_tolerance_m_s: float = 0.02
+    frequency_tolerance_hz: float = 0.1
+    stable_for_s: float = 1.0
+    timeout_s: float = 60.0
+
+
+@dataclass(frozen=True)
+class SweepPlan:
+    """A parsed plan file; ``set_points`` lists the points in the order a sweep visits them."""
+
+    name: str
+    tail_id: str
+    x_h_m: float
+    theta0_rad: float
+    velocity0_m_s: float
+    frequency0_hz: float
+    sweep_offsets: dict[SweepVariable, tuple[float, ...]]
+    steady_state_repeats: int
+    sweep_repeats: int
+    tailless_points: TaillessPoints
+    wind_off_tares: bool
+    record_s: float
+    sample_rate_hz: float
+    settle: SettleCriteria
+    source: str = "<plan>"
+    set_points: tuple[SetPoint, ...] = field(default=(), compare=False)
+
+    def configuration_record(self) -> dict[str, Any]:
+        """The configuration as stored with a run (tail id and x_h)."""
+        return {"tail_id": self.tail_id, "x_h_m": self.x_h_m}
+
+
+_SWEEP_KEYS: dict[str, tuple[SweepVariable, float]] = {
+    "theta_deg": ("theta", math.pi / 180.0),
+    "v_m_s": ("velocity", 1.0),
+    "f_hz": ("frequency", 1.0),
+}
+
+
+class _TableReader:
+    """Reads typed, unit-carrying fields from one TOML table and names the field in every error."""
+
+    def __init__(self, source: str, table_name: str, table: Any) -> None:
+        if not isinstance(table, dict):
+            raise UserInputError(f"{source}: [{table_name}]", "missing or not a table")
+        self.source, self.table_name, self.table = source, table_name, table
+
+    def where(self, key: str) -> str:
+        return f"{self.source}: [{self.table_name}].{key}"
+
+    def number(self, key: str, default: float | None = None, minimum: float | None = None,
+               strictly_positive: bool = False) -> float:
+        if key not in self.table:
+            if default is None:
+                raise UserInputError(self.where(key), "required field is missing")
+            return default
+        value = self.table[key]
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise UserInputError(self.where(key), f"must be a number, got {value!r}")
+        if not math.isfinite(value):
+            raise UserInputError(self.where(key), f"must be a finite number, got {value!r}")
+        if strictly_positive and value <= 0:
+            raise UserInputError(self.where(key), f"must be positive, got {value!r}")
+        if minimum is not None and value < minimum:
+            raise UserInputError(self.where(key), f"must be at least {minimum}, got {value!r}")
+        return float(value)
+
+    def integer(self, key: str, default: int, minimum: int) -> int:
+        value = self.table.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+            raise UserInputError(self.where(key), f"must be an integer >= {minimum}, got {value!r}")
+        return value
+
+    def text(self, key: str, default: str | None = None, choices: tuple[str, ...] = ()) -> str:
+        value = self.table.get(key, default)
+        if value is None:
+            raise UserInputError(self.where(key), "required field is missing")
+        if not isinstance(value, str) or not value.strip():
+            raise UserInputError(self.where(key), f"must be a non-empty string, got {value!r}")
+        if choices and value not in choices:
+            raise UserInputError(self.where(key), f"must be one of {', '.join(choices)}, got {value!r}")
+        return value
+
+    def flag(self, key: str, default: bool) -> bool:
+        value = self.table.get(key, default)
+        if not isinstance(value, bool):
+            raise UserInputError(self.where(key), f"must be true or false, got {value!r}")
+        return value
+
+    def unknown_keys(self, known: set[str]) -> None:
+        unknown = sorted(set(self.table) - known)
+        if unknown:
+            raise UserInputError(
+                self.where(unknown[0]), f"unknown field (known: {', '.join(sorted(known))})"
+            )
+
+
+def _sweep_offsets(source: str, table: Any) -> dict[SweepVariable, tuple[float, ...]]:
+    """Offsets of each one-variable sweep, SI; given as a list or as ``span`` and ``steps``."""
+    if table is None:
+        return {}
+    reader = _TableReader(source, "sweeps", table)
+    reader.unknown_keys(set(_SWEEP_KEYS))
+    offsets: dict[SweepVariable, tuple[float, ...]] = {}
+    for key, (variable, to_si) in _SWEEP_KEYS.items():
+        if key not in table:
+            continue
+        spec = table[key]
+        where = reader.where(key)
+        if isinstance(spec, list):
+            values = spec
+        elif isinstance(spec, dict) and set(spec) == {"span", "steps"}:
+            span, steps = spec["span"], spec["steps"]
+            if not isinstance(steps, int) or isinstance(steps, bool) or steps < 1:
+                raise UserInputError(where + ".steps", f"must be an integer >= 1, got {steps!r}")
+            if not isinstance(span, int | float) or not math.isfinite(span) or span <= 0:
+                raise UserInputError(where + ".span", f"must be a positive number, got {span!r}")
+            values = [span * k / steps for k in range(-steps, steps + 1) if k != 0]
+        else:
+            raise UserInputError(
+                where, "must be a list of offsets or a table {span = ..., steps = ...}"
+            )
+        for value in values:
+            if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+                raise UserInputError(where, f"offset {value!r} is not a finite number")
+        if any(value == 0 for value in values):
+            raise UserInputError(where, "an offset of 0 is the steady state; list it under repeats")
+        offsets[variable] = tuple(float(value) * to_si for value in values)
+    return offsets
+
+
+def load_plan(path: str | Path) -> SweepPlan:
+    """Read and check a plan file; every mistake is a :class:`UserInputError` naming the field."""
+    path = Path(path)
+    source = str(path)
+    try:
+        document = tomllib.loads(path.read_text())
+    except OSError as error:
+        raise UserInputError(source, f"cannot read plan ({error.strerror or error})") from None
+    except tomllib.TOMLDecodeError as error:
+        raise UserInputError(source, f"not valid TOML ({error})") from None
+    return plan_from_document(document, source)
+
+
+def plan_from_document(document: dict[str, Any], source: str = "<plan>") -> SweepPlan:
+    """Build a :class:`SweepPlan` from a parsed TOML document (see ``docs/sweep-plan.md``)."""
+    known_tables = {"plan", "configuration", "steady_state", "sweeps", "protocol", "settle"}
+    unknown = sorted(set(document) - known_tables)
+    if unknown:
+        raise UserInputError(f"{source}: [{unknown[0]}]", "unknown table")
+    plan_table = _TableReader(source, "plan", document.get("plan", {}))
+    plan_table.unknown_keys({"name"})
+    configuration = _TableReader(source, "configuration", document.get("configuration"))
+    configuration.unknown_keys({"tail_id", "x_h_mm"})
+    steady = _TableReader(source, "steady_state", document.get("steady_state"))
+    steady.unknown_keys({"theta_deg", "v_m_s", "f_hz"})
+    protocol = _TableReader(source, "protocol", document.get("protocol", {}))
+    protocol.unknown_keys(
+        {"steady_state_repeats", "sweep_repeats", "tailless_points", "wind_off_tares", "record_s",
+         "sample_rate_hz"}
+    )
+    settle_table = _TableReader(source, "settle", document.get("settle", {}))
+    settle_table.unknown_keys(
+        {"pitch_tolerance_deg", "velocity_tolerance_m_s", "frequency_tolerance_hz", "stable_for_s",
+         "timeout_s"}
+    )
+    defaults = SettleCriteria()
+    settle = SettleCriteria(
+        pitch_tolerance_rad=math.radians(
+            settle_table.number("pitch_tolerance_deg", math.degrees(defaults.pitch_tolerance_rad),
+                                strictly_positive=True)
+        ),
+        velocity_tolerance_m_s=settle_table.number(
+            "velocity_tolerance_m_s", defaults.velocity_tolerance_m_s, strictly_positive=True
+        ),
+        frequency_tolerance_hz=settle_table.number(
+            "frequency_tolerance_hz", defaults.frequency_tolerance_hz, strictly_positive=True
+        ),
+        stable_for_s=settle_table.number("stable_for_s", defaults.stable_for_s, minimum=0.0),
+        timeout_s=settle_table.number("timeout_s", defaults.timeout_s, strictly_positive=True),
+    )
+    plan = SweepPlan(
+        name=plan_table.text("name", default=Path(source).stem),
+        tail_id=configuration.text("tail_id"),
+        x_h_m=configuration.number("x_h_mm", strictly_positive=True) / 1000.0,
+        theta0_rad=math.radians(steady.number("theta_deg")),
+        velocity0_m_s=steady.number("v_m_s", minimum=0.0),
+        frequency0_hz=steady.number("f_hz", strictly_positive=True),
+        sweep_offsets=_sweep_offsets(source, document.get("sweeps")),
+        steady_state_repeats=protocol.integer("steady_state_repeats", 3, minimum=1),
+        sweep_repeats=protocol.integer("sweep_repeats", 1, minimum=1),
+        tailless_points=protocol.text(  # type: ignore[arg-type]
+            "tailless_points", "steady_state", choices=("none", "steady_state", "all")
+        ),
+        wind_off_tares=protocol.flag("wind_off_tares", True),
+        record_s=protocol.number("record_s", 2.0, strictly_positive=True),
+        sample_rate_hz=protocol.number("sample_rate_hz", 10_000.0, strictly_positive=True),
+        settle=settle,
+        source=source,
+    )
+    minimum_record_s = 5.0 / plan.frequency0_hz
+    if plan.record_s < minimum_record_s:
+        raise UserInputError(
+            f"{source}: [protocol].record_s",
+            f"{plan.record_s} s holds fewer than 5 flapping cycles at f0 = {plan.frequency0_hz} Hz; "
+            f"use at least {minimum_record_s:.2f} s",
+        )
+    return _with_set_points(plan)
+
+
+def _measurements_for_tail_state(plan: SweepPlan, tail_attached: bool) -> list[dict[str, Any]]:
+    points = [
+        {"sweep": "steady_state", "repeat": repeat, "pitch_rad": plan.theta0_rad,
+         "tunnel_velocity_m_s": plan.velocity0_m_s, "flapping_frequency_hz": plan.frequency0_hz}
+        for repeat in range(plan.steady_state_repeats)
+    ]
+    if not tail_attached and plan.tailless_points == "steady_state":
+        return points
+    for variable, offsets in plan.sweep_offsets.items():
+        for offset in sorted(offsets):
+            for repeat in range(plan.sweep_repeats):
+                point = {"sweep": variable, "repeat": repeat, "pitch_rad": plan.theta0_rad,
+                         "tunnel_velocity_m_s": plan.velocity0_m_s,
+                         "flapping_frequency_hz": plan.frequency0_hz}
+                key = {"theta": "pitch_rad", "velocity": "tunnel_velocity_m_s",
+                       "frequency": "flapping_frequency_hz"}[variable]
+                point[key] += offset
+                points.append(point)
+    return points
+
+
+def _with_set_points(plan: SweepPlan) -> SweepPlan:
+    """Expand the plan: for each tail state, each pitch in increasing order gets its tare, then its points."""
+    tail_states = [True] if plan.tailless_points == "none" else [True, False]
+    ordered: list[dict[str, Any]] = []
+    for tail_attached in tail_states:
+        measurements = _measurements_for_tail_state(plan, tail_attached)
+        for pitch_rad in sorted({point["pitch_rad"] for point in measurements}):
+            if plan.wind_off_tares:
+                ordered.append({"kind": "tare", "sweep": "tare", "repeat": 0, "pitch_rad": pitch_rad,
+                                "tunnel_velocity_m_s": 0.0, "flapping_frequency_hz": 0.0,
+                                "tail_attached": tail_attached})
+            ordered.extend(
+                {**point, "kind": "measurement", "tail_attached": tail_attached}
+                for point in measurements
+                if point["pitch_rad"] == pitch_rad
+            )
+    set_points = tuple(
+        SetPoint(index=index, record_s=plan.record_s, **point) for index, point in enumerate(ordered)
+    )
+    return SweepPlan(**{**plan.__dict__, "set_points": set_points})
+
+
+def limit_violations(
+    plan: SweepPlan, limits: dict[str, tuple[float, float]]
+) -> list[str]:
+    """Every set point outside the rig's limits, one line each (empty when the plan fits).
+
+    Parameters
+    ----------
+    plan : SweepPlan
+        The expanded plan.
+    limits : dict
+        Closed ranges by set-point field: ``pitch_rad``, ``tunnel_velocity_m_s``, ``flapping_frequency_hz``,
+        SI units. Tares (fan and motor off) are checked for pitch only.
+    """
+    units = {"pitch_rad": ("theta", "deg", math.degrees), "tunnel_velocity_m_s": ("V", "m/s", float),
+             "flapping_frequency_hz": ("f", "Hz", float)}
+    violations = []
+    for point in plan.set_points:
+        for field_name, (low, high) in limits.items():
+            if point.kind == "tare" and field_name != "pitch_rad":
+                continue
+            value = getattr(point, field_name)
+            if not low <= value <= high:
+                symbol, unit, to_user = units[field_name]
+                violations.append(
+                    f"set point #{point.index} ({point.sweep}): {symbol} = {to_user(value):.3f} {unit} "
+                    f"is outside the rig's limits [{to_user(low):.3f}, {to_user(high):.3f}] {unit}"
+                )
+    return violations

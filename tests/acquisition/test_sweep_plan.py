@@ -1,0 +1,104 @@
+"""Sweep plans: expansion into set points, validation of fields and of the rig's limits."""
+
+import math
+import tomllib
+from importlib.resources import files
+
+import pytest
+
+from ornitail.acquisition.sweep_plan import limit_violations, load_plan, plan_from_document
+from ornitail.core.errors import UserInputError
+
+STUDY_PLAN = files("ornitail.acquisition") / "data" / "study_tunnel_plan.toml"
+WIDE_LIMITS = {
+    "pitch_rad": (0.0, math.radians(60)),
+    "tunnel_velocity_m_s": (0.0, 3.0),
+    "flapping_frequency_hz": (0.0, 20.0),
+}
+
+
+def study_document():
+    return tomllib.loads(STUDY_PLAN.read_text())
+
+
+def test_study_plan_expands_to_the_study_protocol():
+    plan = load_plan(STUDY_PLAN)
+    points = plan.set_points
+    measurements = [p for p in points if p.kind == "measurement"]
+    tares = [p for p in points if p.kind == "tare"]
+    # 3 tailed + 3 tailless steady states, 4 offsets for each of 3 sweeps with the tail on.
+    assert len(measurements) == 3 + 3 + 3 * 4
+    # One tare per pitch per tail state: 5 pitches tailed, the steady-state pitch tailless.
+    assert len(tares) == 5 + 1
+    assert [p.index for p in points] == list(range(len(points)))
+    pitches_deg = sorted({round(math.degrees(p.pitch_rad), 9) for p in measurements})
+    assert pitches_deg == [20.0, 22.5, 25.0, 27.5, 30.0]
+    velocities = sorted({p.tunnel_velocity_m_s for p in measurements if p.sweep == "velocity"})
+    assert velocities == pytest.approx([0.55, 0.675, 0.925, 1.05])
+    frequencies = sorted({p.flapping_frequency_hz for p in measurements if p.sweep == "frequency"})
+    assert frequencies == pytest.approx([12.1, 12.8, 14.2, 14.9])
+    assert all(p.tail_attached for p in measurements if p.sweep != "steady_state")
+    assert sum(not p.tail_attached for p in measurements) == 3
+    # Every measurement comes after the tare at its own pitch and tail state.
+    for point in measurements:
+        earlier_tares = [t for t in tares if t.index < point.index]
+        assert earlier_tares[-1].pitch_rad == point.pitch_rad
+        assert earlier_tares[-1].tail_attached == point.tail_attached
+    assert all(t.tunnel_velocity_m_s == 0 and t.flapping_frequency_hz == 0 for t in tares)
+
+
+def test_plan_inside_limits_has_no_violations_and_every_violation_is_listed():
+    plan = load_plan(STUDY_PLAN)
+    assert limit_violations(plan, WIDE_LIMITS) == []
+    narrow = {**WIDE_LIMITS, "pitch_rad": (0.0, math.radians(26)),
+              "flapping_frequency_hz": (10.0, 14.0)}
+    violations = limit_violations(plan, narrow)
+    # Pitches 27.5 and 30 deg: a tare and a measurement each; frequencies 14.2 and 14.9 Hz.
+    assert len(violations) == 6
+    assert sum("theta = 30.000 deg" in line for line in violations) == 2
+    assert any("f = 14.900 Hz" in line and "[10.000, 14.000] Hz" in line for line in violations)
+
+
+@pytest.mark.parametrize(
+    ("table", "key", "value", "message"),
+    [
+        ("steady_state", "theta_deg", float("nan"), r"\[steady_state\]\.theta_deg: must be a finite"),
+        ("steady_state", "f_hz", -13.0, r"\[steady_state\]\.f_hz: must be positive"),
+        ("steady_state", "v_m_s", "fast", r"\[steady_state\]\.v_m_s: must be a number"),
+        ("configuration", "x_h_mm", 0, r"\[configuration\]\.x_h_mm: must be positive"),
+        ("protocol", "steady_state_repeats", 0, r"steady_state_repeats: must be an integer >= 1"),
+        ("protocol", "tailless_points", "some", r"tailless_points: must be one of"),
+        ("protocol", "record_s", 0.2, r"record_s: 0.2 s holds fewer than 5 flapping cycles"),
+        ("protocol", "velocity", 1.0, r"\[protocol\]\.velocity: unknown field"),
+        ("sweeps", "theta_deg", [0.0, 5.0], r"offset of 0 is the steady state"),
+        ("sweeps", "f_hz", {"span": 1.4, "steps": 0}, r"f_hz\.steps: must be an integer >= 1"),
+    ],
+)
+def test_bad_fields_are_named(table, key, value, message):
+    document = study_document()
+    document[table][key] = value
+    with pytest.raises(UserInputError, match=message):
+        plan_from_document(document, "plan.toml")
+
+
+def test_missing_required_field_and_bad_file_are_named(tmp_path):
+    document = study_document()
+    del document["configuration"]["tail_id"]
+    with pytest.raises(UserInputError, match=r"\[configuration\]\.tail_id: required field is missing"):
+        plan_from_document(document, "plan.toml")
+    broken = tmp_path / "broken.toml"
+    broken.write_text("[steady_state\ntheta_deg = 3")
+    with pytest.raises(UserInputError, match="broken.toml: not valid TOML"):
+        load_plan(broken)
+    with pytest.raises(UserInputError, match="absent.toml: cannot read plan"):
+        load_plan(tmp_path / "absent.toml")
+
+
+def test_offsets_as_list_and_no_tailless_points():
+    document = study_document()
+    document["sweeps"] = {"v_m_s": [-0.2, 0.1]}
+    document["protocol"]["tailless_points"] = "none"
+    document["protocol"]["wind_off_tares"] = False
+    plan = plan_from_document(document)
+    assert [p.sweep for p in plan.set_points] == ["steady_state"] * 3 + ["velocity"] * 2
+    assert all(p.tail_attached for p in plan.set_points)
