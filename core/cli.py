@@ -27,10 +27,12 @@ def main() -> None:
 
 
 def _register_area_commands() -> None:
+    from ornitail.acquisition.runs_cli import runs_command
     from ornitail.calibration.cli import calibration_group
     from ornitail.sim.cli import sim_group
 
     main.add_command(calibration_group)
+    main.add_command(runs_command)
     main.add_command(sim_group)
 
 

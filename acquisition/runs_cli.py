@@ -1,0 +1,130 @@
+"""``ornitail runs``: list and filter the recorded runs of a data root."""
+
+from __future__ import annotations
+
+import math
+from datetime import datetime
+from pathlib import Path
+from typing import Any
+
+import click
+
+from ornitail.acquisition.catalog import (
+    DATA_ROOT_ENVIRONMENT_VARIABLE,
+    RunCatalog,
+    RunFilter,
+    default_data_root,
+)
+from ornitail.core.errors import UserInputError
+from ornitail.core.output import emit, json_option
+
+_TABLE_COLUMNS = (
+    ("run_id", 34),
+    ("status", 9),
+    ("tail", 6),
+    ("x_h_mm", 7),
+    ("tailed", 8),
+    ("plan", 14),
+    ("start_utc", 19),
+    ("samples", 10),
+    ("set_pts", 7),
+    ("lost", 8),
+    ("crc", 5),
+)
+
+
+def parse_x_h_mm(text: str) -> float:
+    """Parse ``--x-h-mm`` and return x_h in metres; a non-number or NaN is a user error."""
+    try:
+        value_mm = float(text)
+    except ValueError:
+        raise UserInputError("--x-h-mm", f"{text!r} is not a number of millimetres") from None
+    if not math.isfinite(value_mm):
+        raise UserInputError("--x-h-mm", f"value {text!r} is not a finite number")
+    return value_mm * 1e-3
+
+
+def parse_since(text: str) -> datetime:
+    """Parse ``--since`` (ISO 8601 date or date-time); a time without zone is local time."""
+    try:
+        moment = datetime.fromisoformat(text)
+    except ValueError:
+        raise UserInputError(
+            "--since", f"{text!r} is not an ISO 8601 date or time (e.g. 2024-06-07T14:00)"
+        ) from None
+    return moment if moment.tzinfo is not None else moment.astimezone()
+
+
+def _lost_samples(run: dict[str, Any]) -> int:
+    return run["queue_lost_samples"] + run["link_lost_samples"] + run["counter_missing_samples"]
+
+
+def _render_table(result: dict[str, Any]) -> str:
+    runs = result["runs"]
+    if not runs:
+        return "no runs match"
+    header = " ".join(f"{name:<{width}}" for name, width in _TABLE_COLUMNS).rstrip()
+    lines = [header, "-" * len(header)]
+    for run in runs:
+        x_h_mm = "-" if run["x_h_m"] is None else f"{run['x_h_m'] * 1e3:.1f}"
+        cells = (
+            run["run_id"],
+            run["exit_status"],
+            run["tail_id"] or "-",
+            x_h_mm,
+            "tailed" if run["tailed"] else "tailless",
+            run["plan_name"] or "-",
+            run["start_time_utc"][:19],
+            str(run["sample_count"]),
+            str(run["set_point_count"]),
+            str(_lost_samples(run)),
+            str(run["crc_errors"]),
+        )
+        widths = [width for _, width in _TABLE_COLUMNS]
+        row = " ".join(f"{cell:<{w}}" for cell, w in zip(cells, widths, strict=True))
+        lines.append(row.rstrip())
+        if run["failure_reason"] and run["exit_status"] != "completed":
+            lines.append(f"    reason: {run['failure_reason']}")
+    return "\n".join(lines)
+
+
+@click.command("runs")
+@click.option(
+    "--data-root",
+    type=click.Path(path_type=Path, file_okay=False),
+    default=None,
+    help=f"Folder of runs and catalog.sqlite [default: ${DATA_ROOT_ENVIRONMENT_VARIABLE} "
+    "or ./ornitail-data].",
+)
+@click.option("--tail", "tail_id", default=None, help="Tail id, e.g. S3 (case-insensitive).")
+@click.option("--x-h-mm", "x_h_mm_text", default=None, help="Tail position x_h in mm (±0.05 mm).")
+@click.option("--tailed/--tailless", default=None, help="Only runs with / without the tail.")
+@click.option(
+    "--status",
+    default=None,
+    help="completed, aborted, failed, crashed or running.",
+)
+@click.option("--since", "since_text", default=None, help="Runs started at or after (ISO 8601).")
+@json_option
+def runs_command(
+    data_root: Path | None,
+    tail_id: str | None,
+    x_h_mm_text: str | None,
+    tailed: bool | None,
+    status: str | None,
+    since_text: str | None,
+    as_json: bool,
+) -> None:
+    """List recorded runs, oldest first; runs whose process died are shown as crashed."""
+    run_filter = RunFilter(
+        tail_id=tail_id,
+        x_h_m=None if x_h_mm_text is None else parse_x_h_mm(x_h_mm_text),
+        tailed=tailed,
+        exit_status=status,
+        started_since_utc=None if since_text is None else parse_since(since_text),
+    )
+    run_filter.validate()
+    catalog = RunCatalog(data_root if data_root is not None else default_data_root())
+    catalog.reconcile()
+    runs = [entry.to_json_dict() for entry in catalog.find_runs(run_filter)]
+    emit({"runs": runs}, as_json, _render_table)
