@@ -1,0 +1,106 @@
+"""``ornitail sim``: trim a simulated build and print its linear model; fly a flight log."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import click
+
+from ornitail.core.errors import UserInputError
+from ornitail.core.output import emit, json_option
+from ornitail.sim.configuration import study_configuration
+from ornitail.sim.dynamics import TrimNotFoundError, linearise
+from ornitail.sim.effects import EffectSet
+from ornitail.sim.free_flight import FlightPlan, simulate_flight, write_flight_log_csv
+
+sim_group = click.Group("sim", help="Physics simulator of the DelFly II with its tail.")
+
+
+def trim_summary(tail: str, x_h_mm: float) -> dict[str, Any]:
+    """Trim, eigenstructure and derivatives of a study tail at x_h (mm) as a JSON-ready dict."""
+    configuration = study_configuration(tail, x_h_mm)
+    try:
+        model = linearise(configuration, EffectSet())
+    except TrimNotFoundError as error:
+        raise UserInputError(f"--tail {tail} --x-h-mm {x_h_mm:g}", str(error)) from error
+    trim = model.trim
+    return {
+        "tail": tail,
+        "x_h_mm": x_h_mm,
+        "theta_deg": math.degrees(trim.theta_rad),
+        "v_m_s": trim.airspeed_m_s,
+        "f_hz": trim.flapping_frequency_hz,
+        "throttle": trim.throttle,
+        "mass_kg": model.mass_kg,
+        "iyy_kg_m2": model.iyy_kg_m2,
+        "eigenvalues_real": [value.real for value in model.eigenvalues()],
+        "eigenvalues_imag": [value.imag for value in model.eigenvalues()],
+        "damping_ratio": model.oscillatory_damping_ratio(),
+        "natural_frequency_rad_s": model.oscillatory_natural_frequency_rad_s(),
+        "derivatives": model.derivatives,
+    }
+
+
+def _render_trim(result: dict[str, Any]) -> str:
+    poles = ", ".join(
+        f"{re:.3f}{im:+.3f}j"
+        for re, im in zip(result["eigenvalues_real"], result["eigenvalues_imag"], strict=True)
+    )
+    lines = [
+        f"tail {result['tail']} at x_h = {result['x_h_mm']:g} mm",
+        f"theta_deg {result['theta_deg']:.2f}  v_m_s {result['v_m_s']:.3f}"
+        f"  f_hz {result['f_hz']:.2f}"
+        f"  throttle {result['throttle']:.3f}",
+        f"eigenvalues [1/s]: {poles}",
+        f"damping ratio {result['damping_ratio']:.3f}  natural frequency "
+        f"{result['natural_frequency_rad_s']:.3f} rad/s",
+        "derivatives (SI, body frame of docs/frames.md):",
+    ]
+    lines += [f"  {name:4s} {value: .4e}" for name, value in result["derivatives"].items()]
+    return "\n".join(lines)
+
+
+@sim_group.command("trim")
+@click.option("--tail", required=True, help="Study tail name, e.g. S3, AR1, T2.")
+@click.option(
+    "--x-h-mm", type=float, default=98.0, show_default=True, help="Tail position x_h in mm."
+)
+@json_option
+def trim_command(tail: str, x_h_mm: float, as_json: bool) -> None:
+    """Free-flight trim and linearised model of a study tail."""
+    emit(trim_summary(tail, x_h_mm), as_json, _render_trim)
+
+
+@sim_group.command("flight")
+@click.option("--tail", required=True, help="Study tail name, e.g. S3.")
+@click.option(
+    "--x-h-mm", type=float, default=98.0, show_default=True, help="Tail position x_h in mm."
+)
+@click.option(
+    "--duration-s", type=float, default=60.0, show_default=True, help="Flight length in s."
+)
+@click.option(
+    "--seed", type=int, default=0, show_default=True, help="Random seed (gusts, noise, turns)."
+)
+@click.option(
+    "--out", type=click.Path(dir_okay=False, path_type=Path), required=True, help="CSV to write."
+)
+@json_option
+def flight_command(
+    tail: str, x_h_mm: float, duration_s: float, seed: int, out: Path, as_json: bool
+) -> None:
+    """Fly elevator doublets with a study tail and write the 512 Hz flight log as CSV."""
+    if not (math.isfinite(duration_s) and 1.0 <= duration_s <= 3600.0):
+        raise UserInputError("--duration-s", f"value {duration_s!r} is outside 1..3600 s")
+    configuration = study_configuration(tail, x_h_mm)
+    try:
+        log = simulate_flight(
+            configuration, EffectSet(), FlightPlan(duration_s=duration_s), seed=seed
+        )
+    except TrimNotFoundError as error:
+        raise UserInputError(f"--tail {tail}", str(error)) from error
+    write_flight_log_csv(log, out)
+    result = {"path": str(out), "rows": len(log), "columns": list(log.columns), "seed": seed}
+    emit(result, as_json, lambda r: f"wrote {r['rows']} rows to {r['path']}")
