@@ -136,8 +136,13 @@ class _TableReader:
     def where(self, key: str) -> str:
         return f"{self.source}: [{self.table_name}].{key}"
 
-    def number(self, key: str, default: float | None = None, minimum: float | None = None,
-               strictly_positive: bool = False) -> float:
+    def number(
+        self,
+        key: str,
+        default: float | None = None,
+        minimum: float | None = None,
+        strictly_positive: bool = False,
+    ) -> float:
         if key not in self.table:
             if default is None:
                 raise UserInputError(self.where(key), "required field is missing")
@@ -166,7 +171,9 @@ class _TableReader:
         if not isinstance(value, str) or not value.strip():
             raise UserInputError(self.where(key), f"must be a non-empty string, got {value!r}")
         if choices and value not in choices:
-            raise UserInputError(self.where(key), f"must be one of {', '.join(choices)}, got {value!r}")
+            raise UserInputError(
+                self.where(key), f"must be one of {', '.join(choices)}, got {value!r}"
+            )
         return value
 
     def flag(self, key: str, default: bool) -> bool:
@@ -209,7 +216,11 @@ def _sweep_offsets(source: str, table: Any) -> dict[SweepVariable, tuple[float, 
                 where, "must be a list of offsets or a table {span = ..., steps = ...}"
             )
         for value in values:
-            if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, int | float)
+                or not math.isfinite(value)
+            ):
                 raise UserInputError(where, f"offset {value!r} is not a finite number")
         if any(value == 0 for value in values):
             raise UserInputError(where, "an offset of 0 is the steady state; list it under repeats")
@@ -244,19 +255,33 @@ def plan_from_document(document: dict[str, Any], source: str = "<plan>") -> Swee
     steady.unknown_keys({"theta_deg", "v_m_s", "f_hz"})
     protocol = _TableReader(source, "protocol", document.get("protocol", {}))
     protocol.unknown_keys(
-        {"steady_state_repeats", "sweep_repeats", "tailless_points", "wind_off_tares", "record_s",
-         "sample_rate_hz"}
+        {
+            "steady_state_repeats",
+            "sweep_repeats",
+            "tailless_points",
+            "wind_off_tares",
+            "record_s",
+            "sample_rate_hz",
+        }
     )
     settle_table = _TableReader(source, "settle", document.get("settle", {}))
     settle_table.unknown_keys(
-        {"pitch_tolerance_deg", "velocity_tolerance_m_s", "frequency_tolerance_hz", "stable_for_s",
-         "timeout_s"}
+        {
+            "pitch_tolerance_deg",
+            "velocity_tolerance_m_s",
+            "frequency_tolerance_hz",
+            "stable_for_s",
+            "timeout_s",
+        }
     )
     defaults = SettleCriteria()
     settle = SettleCriteria(
         pitch_tolerance_rad=math.radians(
-            settle_table.number("pitch_tolerance_deg", math.degrees(defaults.pitch_tolerance_rad),
-                                strictly_positive=True)
+            settle_table.number(
+                "pitch_tolerance_deg",
+                math.degrees(defaults.pitch_tolerance_rad),
+                strictly_positive=True,
+            )
         ),
         velocity_tolerance_m_s=settle_table.number(
             "velocity_tolerance_m_s", defaults.velocity_tolerance_m_s, strictly_positive=True
@@ -298,8 +323,13 @@ def plan_from_document(document: dict[str, Any], source: str = "<plan>") -> Swee
 
 def _measurements_for_tail_state(plan: SweepPlan, tail_attached: bool) -> list[dict[str, Any]]:
     points = [
-        {"sweep": "steady_state", "repeat": repeat, "pitch_rad": plan.theta0_rad,
-         "tunnel_velocity_m_s": plan.velocity0_m_s, "flapping_frequency_hz": plan.frequency0_hz}
+        {
+            "sweep": "steady_state",
+            "repeat": repeat,
+            "pitch_rad": plan.theta0_rad,
+            "tunnel_velocity_m_s": plan.velocity0_m_s,
+            "flapping_frequency_hz": plan.frequency0_hz,
+        }
         for repeat in range(plan.steady_state_repeats)
     ]
     if not tail_attached and plan.tailless_points == "steady_state":
@@ -307,11 +337,18 @@ def _measurements_for_tail_state(plan: SweepPlan, tail_attached: bool) -> list[d
     for variable, offsets in plan.sweep_offsets.items():
         for offset in sorted(offsets):
             for repeat in range(plan.sweep_repeats):
-                point = {"sweep": variable, "repeat": repeat, "pitch_rad": plan.theta0_rad,
-                         "tunnel_velocity_m_s": plan.velocity0_m_s,
-                         "flapping_frequency_hz": plan.frequency0_hz}
-                key = {"theta": "pitch_rad", "velocity": "tunnel_velocity_m_s",
-                       "frequency": "flapping_frequency_hz"}[variable]
+                point = {
+                    "sweep": variable,
+                    "repeat": repeat,
+                    "pitch_rad": plan.theta0_rad,
+                    "tunnel_velocity_m_s": plan.velocity0_m_s,
+                    "flapping_frequency_hz": plan.frequency0_hz,
+                }
+                key = {
+                    "theta": "pitch_rad",
+                    "velocity": "tunnel_velocity_m_s",
+                    "frequency": "flapping_frequency_hz",
+                }[variable]
                 point[key] += offset
                 points.append(point)
     return points
@@ -325,23 +362,30 @@ def _with_set_points(plan: SweepPlan) -> SweepPlan:
         measurements = _measurements_for_tail_state(plan, tail_attached)
         for pitch_rad in sorted({point["pitch_rad"] for point in measurements}):
             if plan.wind_off_tares:
-                ordered.append({"kind": "tare", "sweep": "tare", "repeat": 0, "pitch_rad": pitch_rad,
-                                "tunnel_velocity_m_s": 0.0, "flapping_frequency_hz": 0.0,
-                                "tail_attached": tail_attached})
+                ordered.append(
+                    {
+                        "kind": "tare",
+                        "sweep": "tare",
+                        "repeat": 0,
+                        "pitch_rad": pitch_rad,
+                        "tunnel_velocity_m_s": 0.0,
+                        "flapping_frequency_hz": 0.0,
+                        "tail_attached": tail_attached,
+                    }
+                )
             ordered.extend(
                 {**point, "kind": "measurement", "tail_attached": tail_attached}
                 for point in measurements
                 if point["pitch_rad"] == pitch_rad
             )
     set_points = tuple(
-        SetPoint(index=index, record_s=plan.record_s, **point) for index, point in enumerate(ordered)
+        SetPoint(index=index, record_s=plan.record_s, **point)
+        for index, point in enumerate(ordered)
     )
     return SweepPlan(**{**plan.__dict__, "set_points": set_points})
 
 
-def limit_violations(
-    plan: SweepPlan, limits: dict[str, tuple[float, float]]
-) -> list[str]:
+def limit_violations(plan: SweepPlan, limits: dict[str, tuple[float, float]]) -> list[str]:
     """Every set point outside the rig's limits, one line each (empty when the plan fits).
 
     Parameters
@@ -352,8 +396,11 @@ def limit_violations(
         Closed ranges by set-point field: ``pitch_rad``, ``tunnel_velocity_m_s``, ``flapping_frequency_hz``,
         SI units. Tares (fan and motor off) are checked for pitch only.
     """
-    units = {"pitch_rad": ("theta", "deg", math.degrees), "tunnel_velocity_m_s": ("V", "m/s", float),
-             "flapping_frequency_hz": ("f", "Hz", float)}
+    units = {
+        "pitch_rad": ("theta", "deg", math.degrees),
+        "tunnel_velocity_m_s": ("V", "m/s", float),
+        "flapping_frequency_hz": ("f", "Hz", float),
+    }
     violations = []
     for point in plan.set_points:
         for field_name, (low, high) in limits.items():

@@ -16,15 +16,28 @@ Voltages and their laws (all *estimates* of typical hardware, documented in docs
 from __future__ import annotations
 
 from dataclasses import dataclass
+from importlib import resources
 
 import numpy as np
 
+from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.sim.effects import BalanceResolution, BalanceThermalDrift, HotwireTemperature
 
 HALL_HIGH_V = 3.3
 HALL_PULSE_FRACTION = 0.05
 THERMOCOUPLE_OFFSET_V = 1.25
 THERMOCOUPLE_V_PER_C = 0.005
+
+
+def balance_calibration_matrix_si() -> np.ndarray:
+    """Working matrix (V -> N, N m, sensor frame) of the simulated rig's real Nano-17 calibration.
+
+    Reads ``calibration/data/FT8884.cal`` (package data of ``ornitail.calibration``) with the
+    project's ATI parser: ``Axis`` rows over ``scale`` in SI with the file's ``BasicTransform``.
+    """
+    calibration_file = resources.files("ornitail.calibration").joinpath("data/FT8884.cal")
+    with resources.as_file(calibration_file) as path:
+        return AtiCalibration.from_file(path).matrix_si
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,7 @@ harmonics (through the balance/strut resonance if that effect is on) and the wei
 with theta in the sensor frame. Loads about the CG are moved to the sensor origin and rotated into
 the sensor axes given by the configuration's :class:`~ornitail.sim.configuration.BalanceMounting`,
 then turned into six gauge voltages through the inverse of the real Nano-17 calibration matrix
-(``sim/data/FT8884.cal``).
+(``calibration/data/FT8884.cal``, read by ``ornitail.calibration``).
 """
 
 from __future__ import annotations
@@ -20,11 +20,11 @@ import pandas as pd
 from scipy.signal import lfilter
 
 from ornitail.core.errors import UserInputError, require_finite
-from ornitail.sim.calibration_matrix import packaged_nano17_matrix_si
 from ornitail.sim.configuration import VehicleConfiguration, default_configuration
 from ornitail.sim.effects import EffectSet
 from ornitail.sim.instruments import (
     BalanceGauges,
+    balance_calibration_matrix_si,
     TunnelConditions,
     hall_voltage,
     hotwire_bridge_voltage,
@@ -177,7 +177,7 @@ class TunnelSignalSource:
             False: PreparedVehicle(self.configuration.without_tail(), self.effects, "tunnel"),
         }
         self.gauges = BalanceGauges(
-            packaged_nano17_matrix_si(),
+            balance_calibration_matrix_si(),
             self.effects.balance_resolution,
             self.effects.balance_thermal_drift,
             self._generator,

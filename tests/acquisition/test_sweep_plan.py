@@ -50,8 +50,11 @@ def test_study_plan_expands_to_the_study_protocol():
 def test_plan_inside_limits_has_no_violations_and_every_violation_is_listed():
     plan = load_plan(STUDY_PLAN)
     assert limit_violations(plan, WIDE_LIMITS) == []
-    narrow = {**WIDE_LIMITS, "pitch_rad": (0.0, math.radians(26)),
-              "flapping_frequency_hz": (10.0, 14.0)}
+    narrow = {
+        **WIDE_LIMITS,
+        "pitch_rad": (0.0, math.radians(26)),
+        "flapping_frequency_hz": (10.0, 14.0),
+    }
     violations = limit_violations(plan, narrow)
     # Pitches 27.5 and 30 deg: a tare and a measurement each; frequencies 14.2 and 14.9 Hz.
     assert len(violations) == 6
@@ -62,7 +65,12 @@ def test_plan_inside_limits_has_no_violations_and_every_violation_is_listed():
 @pytest.mark.parametrize(
     ("table", "key", "value", "message"),
     [
-        ("steady_state", "theta_deg", float("nan"), r"\[steady_state\]\.theta_deg: must be a finite"),
+        (
+            "steady_state",
+            "theta_deg",
+            float("nan"),
+            r"\[steady_state\]\.theta_deg: must be a finite",
+        ),
         ("steady_state", "f_hz", -13.0, r"\[steady_state\]\.f_hz: must be positive"),
         ("steady_state", "v_m_s", "fast", r"\[steady_state\]\.v_m_s: must be a number"),
         ("configuration", "x_h_mm", 0, r"\[configuration\]\.x_h_mm: must be positive"),
@@ -84,7 +92,9 @@ def test_bad_fields_are_named(table, key, value, message):
 def test_missing_required_field_and_bad_file_are_named(tmp_path):
     document = study_document()
     del document["configuration"]["tail_id"]
-    with pytest.raises(UserInputError, match=r"\[configuration\]\.tail_id: required field is missing"):
+    with pytest.raises(
+        UserInputError, match=r"\[configuration\]\.tail_id: required field is missing"
+    ):
         plan_from_document(document, "plan.toml")
     broken = tmp_path / "broken.toml"
     broken.write_text("[steady_state\ntheta_deg = 3")

@@ -11,6 +11,7 @@ from ornitail.design.geometry import TailGeometry
 from ornitail.sim.configuration import VehicleConfiguration, study_configuration
 from ornitail.sim.dynamics import linearise, trim
 from ornitail.sim.effects import EFFECT_NAMES, EffectSet
+from ornitail.sim.instruments import balance_calibration_matrix_si
 from ornitail.sim.model import PreparedVehicle
 from ornitail.sim.tunnel import TunnelSignalSource, true_cycle_average
 from ornitail.sim.vehicle import mass_properties
@@ -153,9 +154,7 @@ def test_balance_resolution_adds_noise_at_the_sensor_resolution() -> None:
     quiet = EffectSet.none()
     assert np.ptp(_gauges(quiet)[:, :6], axis=0).max() == 0.0
     noisy = _gauges(quiet.with_enabled("balance_resolution"))[:, :6]
-    from ornitail.sim.calibration_matrix import packaged_nano17_matrix_si
-
-    force_std = (noisy @ packaged_nano17_matrix_si().T)[:, :3].std(axis=0)
+    force_std = (noisy @ balance_calibration_matrix_si().T)[:, :3].std(axis=0)
     # 1.46e-3 N noise plus 16-bit quantisation (~0.3 mV * 7 N/V / sqrt(12) ~ 6e-4 N): 1.4-2.0e-3 N
     assert np.all((force_std > 1.3e-3) & (force_std < 2.2e-3))
 

@@ -8,10 +8,9 @@ import numpy as np
 import pytest
 
 from ornitail.core.errors import UserInputError
-from ornitail.sim.calibration_matrix import packaged_nano17_matrix_si
 from ornitail.sim.configuration import study_configuration
 from ornitail.sim.effects import EffectSet
-from ornitail.sim.instruments import HALL_HIGH_V
+from ornitail.sim.instruments import HALL_HIGH_V, balance_calibration_matrix_si
 from ornitail.sim.parameters import GRAVITY_M_S2, MOTOR_TO_FLAP_GEAR_RATIO
 from ornitail.sim.tunnel import (
     CHANNELS,
@@ -20,7 +19,7 @@ from ornitail.sim.tunnel import (
     true_cycle_average,
 )
 
-MATRIX = packaged_nano17_matrix_si()
+MATRIX = balance_calibration_matrix_si()
 CONFIGURATION = study_configuration("S3", 98)
 NO_DRIFT = EffectSet().without("balance_thermal_drift")
 
@@ -31,9 +30,11 @@ def _rising_edges(hall: np.ndarray) -> np.ndarray:
 
 
 def test_packaged_matrix_is_the_real_nano17_in_si_units() -> None:
-    # FT8884.cal: Fz row first value 21.68095 / scale 3.07423790488014 N/V; Tx row in N-mm -> N m
+    # FT8884.cal: Fz row first value 21.68095 / scale 3.07423790488014 N/V; Tx row in N-mm -> N m,
+    # moved by the file's BasicTransform Dz = 6.096 mm: Tx' = Tx + Dz Fy (Fy row: -1.27992 / scale)
     assert MATRIX[2, 0] == pytest.approx(21.68095 / 3.07423790488014)
-    assert MATRIX[3, 2] == pytest.approx(38.02439 / 0.965832440764422 / 1000)
+    fy = -1.27992 / 5.41651440383645
+    assert MATRIX[3, 2] == pytest.approx(38.02439 / 0.965832440764422 / 1000 + 0.006096 * fy)
 
 
 def test_record_columns_and_shape() -> None:

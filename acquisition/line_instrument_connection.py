@@ -1,0 +1,117 @@
+"""Request/reply over a serial port with newline-terminated ASCII lines (fan, strut, motor).
+
+Each command is one line (``RPM 1200\\n``); each reply is one line: ``OK``, a value
+(``RPM 1187.3``) or ``ERR <reason>``. The connection is locked so that a GUI and a sweep can share
+one instrument. Port failures and silence raise :class:`InstrumentDisconnected`, ``ERR`` replies
+:class:`InstrumentReplyError`, both naming the instrument.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+import time
+
+import serial
+
+from ornitail.acquisition.instrument_errors import InstrumentDisconnected, InstrumentReplyError
+
+DEFAULT_LINE_BAUD = 115_200
+
+
+class LineInstrumentConnection:
+    """One ASCII line-protocol instrument on ``port``.
+
+    Parameters
+    ----------
+    port : str
+        Serial device or pty path.
+    name : str
+        Instrument name used in error messages.
+    baud : int
+        Line rate, baud.
+    reply_timeout_s : float
+        How long to wait for a reply line, s.
+    """
+
+    def __init__(
+        self, port: str, *, name: str, baud: int = DEFAULT_LINE_BAUD, reply_timeout_s: float = 1.0
+    ) -> None:
+        self.port = port
+        self.name = name
+        self.baud = baud
+        self.reply_timeout_s = reply_timeout_s
+        self._serial: serial.Serial | None = None
+        self._lock = threading.Lock()
+
+    def open(self) -> None:
+        """Open the port (raises InstrumentDisconnected if it cannot)."""
+        try:
+            self._serial = serial.Serial(self.port, self.baud, timeout=0.05, write_timeout=1.0)
+            self._serial.reset_input_buffer()
+        except (OSError, ValueError) as error:
+            raise InstrumentDisconnected(self.name, f"cannot open {self.port}: {error}") from None
+
+    def close(self) -> None:
+        """Close the port; safe to call twice."""
+        if self._serial is not None:
+            with contextlib.suppress(OSError):
+                self._serial.close()
+            self._serial = None
+
+    @property
+    def is_open(self) -> bool:
+        """True between open() and close()."""
+        return self._serial is not None
+
+    def query(self, command: str) -> str:
+        """Send ``command`` and return the reply line without its newline.
+
+        Raises
+        ------
+        InstrumentReplyError
+            The instrument answered ``ERR <reason>``.
+        InstrumentDisconnected
+            The port failed or no full line arrived within ``reply_timeout_s``.
+        """
+        if self._serial is None:
+            raise InstrumentDisconnected(self.name, f"port {self.port} is not open")
+        with self._lock:
+            try:
+                self._serial.write(command.encode("ascii") + b"\n")
+                reply = b""
+                deadline = time.monotonic() + self.reply_timeout_s
+                while not reply.endswith(b"\n") and time.monotonic() < deadline:
+                    reply += self._serial.read_until(b"\n")
+            except OSError as error:
+                raise InstrumentDisconnected(
+                    self.name, f"port {self.port} failed: {error}"
+                ) from None
+        if not reply.endswith(b"\n"):
+            raise InstrumentDisconnected(
+                self.name,
+                f"no reply to {command!r} within {self.reply_timeout_s:g} s on {self.port}",
+            )
+        text = reply.decode("ascii", errors="replace").strip()
+        if text.startswith("ERR"):
+            raise InstrumentReplyError(self.name, f"refused {command!r}: {text[3:].strip()}")
+        return text
+
+    def command(self, command: str) -> None:
+        """Send a set command and require the reply ``OK``."""
+        reply = self.query(command)
+        if reply != "OK":
+            raise InstrumentReplyError(self.name, f"expected OK to {command!r}, got {reply!r}")
+
+    def query_value(self, command: str, keyword: str) -> float:
+        """Send a query such as ``RPM?`` and return the number of the reply ``RPM <value>``."""
+        reply = self.query(command)
+        words = reply.split()
+        try:
+            if len(words) != 2 or words[0] != keyword:
+                raise ValueError
+            return float(words[1])
+        except ValueError:
+            raise InstrumentReplyError(
+                self.name, f"expected '{keyword} <number>' to {command!r}, got {reply!r}"
+            ) from None

@@ -1,0 +1,387 @@
+"""Driver of ATI's NETCANOEM board over CAN (python-can): the second route to the Nano-17 balance.
+
+The bus is opened with ``can.Bus(interface=..., channel=..., bitrate=...)`` from the rig file, so
+socketcan, pcan, kvaser or python-can's in-process ``virtual`` bus differ only by configuration.
+
+Threading
+---------
+Queries (serial number, matrix, counts per unit, ...) run in the caller's thread and are refused
+while polling. :meth:`NetCanOemDriver.start_polling` starts one thread that sends a gauge request at
+the requested rate, waits for its two replies, and hands blocks of samples (:class:`GaugeBlock`,
+about every ``block_period_s``) to a bounded queue read with :meth:`get_block` (a full queue drops
+the block and counts it). CAN error frames received are counted in :attr:`error_frames` and polling
+goes on; a bus error from python-can, or ``missed_replies_limit`` requests in a row without an
+answer, ends the thread with :class:`InstrumentDisconnected` (raised by ``get_block``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import queue
+import threading
+import time
+from dataclasses import dataclass
+
+import can
+import numpy as np
+
+from ornitail.acquisition import netcanoem_protocol as protocol
+from ornitail.acquisition.instrument_errors import InstrumentDisconnected, InstrumentReplyError
+from ornitail.core.errors import UserInputError, require_finite
+
+
+@dataclass
+class GaugeReading:
+    """One polled sample: status word, raw gauges (6,) int16, saturation flags (6,) bool."""
+
+    status_word: int
+    gauges: np.ndarray
+    saturated: np.ndarray
+
+
+@dataclass
+class GaugeBlock:
+    """Consecutive polled samples.
+
+    host_time_s : (n,) ``time.monotonic()`` when each request was sent, s.
+    status_words : (n,) uint16.
+    gauges : (n, 6) int16 raw gauge counts.
+    saturated : (n, 6) bool, gauge at -32768 or +32767.
+    """
+
+    host_time_s: np.ndarray
+    status_words: np.ndarray
+    gauges: np.ndarray
+    saturated: np.ndarray
+
+
+class NetCanOemDriver:
+    """Polls raw Nano-17 gauges from a NETCANOEM board and reads its calibration.
+
+    Parameters
+    ----------
+    interface, channel : str
+        python-can interface name and channel (``"socketcan", "can0"``; ``"virtual", "rig0"``).
+    bit_rate : float
+        Bus bit rate, bit/s; sets the sample-rate ceiling.
+    base_id : int
+        The board's 7-bit base identifier.
+    name : str
+        Instrument name used in error messages.
+    reply_timeout_s : float
+        How long to wait for each reply, s.
+    """
+
+    def __init__(
+        self,
+        *,
+        interface: str,
+        channel: str,
+        bit_rate: float = 1_000_000,
+        base_id: int = protocol.DEFAULT_BASE_ID,
+        name: str = "NETCANOEM balance",
+        reply_timeout_s: float = 0.1,
+        missed_replies_limit: int = 3,
+        block_period_s: float = 0.01,
+        queue_blocks: int = 2000,
+    ) -> None:
+        self.interface = interface
+        self.channel = channel
+        self.bit_rate = float(bit_rate)
+        self.base_id = int(base_id)
+        self.name = name
+        self.reply_timeout_s = reply_timeout_s
+        self.missed_replies_limit = missed_replies_limit
+        self.block_period_s = block_period_s
+        self.blocks: queue.Queue[GaugeBlock | None] = queue.Queue(maxsize=queue_blocks)
+        self.blocks_dropped = 0
+        self.error_frames = 0
+        self.missed_replies = 0
+        self.samples_polled = 0
+        self._bus: can.BusABC | None = None
+        self._poller: threading.Thread | None = None
+        self._stop_polling = threading.Event()
+        self._failure: Exception | None = None
+
+    # -- connection -------------------------------------------------------------------------
+    def open(self) -> str:
+        """Open the bus and return the board's serial number (proves it answers)."""
+        try:
+            self._bus = can.Bus(
+                interface=self.interface, channel=self.channel, bitrate=int(self.bit_rate)
+            )
+        except (can.CanError, OSError, ValueError, ImportError) as error:
+            raise InstrumentDisconnected(
+                self.name,
+                f"cannot open CAN interface {self.interface!r} channel {self.channel!r}: {error}",
+            ) from None
+        return self.read_serial_number()
+
+    def close(self) -> None:
+        """Stop polling and shut the bus down; safe to call twice or after a failure."""
+        if self._poller is not None:
+            with contextlib.suppress(InstrumentDisconnected):
+                self.stop_polling()
+        if self._bus is not None:
+            self._bus.shutdown()
+            self._bus = None
+
+    def __enter__(self) -> NetCanOemDriver:
+        self.open()
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+    # -- request / reply --------------------------------------------------------------------
+    def _send(self, opcode: int, data: bytes = b"") -> None:
+        if self._bus is None:
+            raise RuntimeError(f"{self.name}: bus is not open; call open() first")
+        message = can.Message(
+            arbitration_id=protocol.arbitration_id(self.base_id, opcode),
+            is_extended_id=False,
+            data=data,
+        )
+        try:
+            self._bus.send(message)
+        except (can.CanError, OSError) as error:
+            raise InstrumentDisconnected(self.name, f"CAN bus error on send: {error}") from None
+
+    def _receive(self, wanted: dict[int, int], timeout_s: float) -> dict[int, bytes] | None:
+        """Collect one reply per opcode in ``wanted`` (opcode -> DLC); None on timeout."""
+        assert self._bus is not None
+        replies: dict[int, bytes] = {}
+        deadline = time.monotonic() + timeout_s
+        while len(replies) < len(wanted):
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                return None
+            try:
+                message = self._bus.recv(remaining)
+            except (can.CanError, OSError) as error:
+                raise InstrumentDisconnected(
+                    self.name, f"CAN bus error on receive: {error}"
+                ) from None
+            if message is None:
+                return None
+            if message.is_error_frame:
+                self.error_frames += 1
+                continue
+            if message.is_extended_id or message.is_remote_frame:
+                continue
+            base_id, opcode = protocol.split_arbitration_id(message.arbitration_id)
+            if base_id == self.base_id and wanted.get(opcode) == message.dlc:
+                replies[opcode] = bytes(message.data)
+        return replies
+
+    def _query(self, opcode: int, wanted: dict[int, int], data: bytes = b"") -> dict[int, bytes]:
+        if self._poller is not None:
+            raise RuntimeError(f"{self.name}: stop_polling() before sending opcode {opcode:#x}")
+        self._send(opcode, data)
+        replies = self._receive(wanted, self.reply_timeout_s)
+        if replies is None:
+            raise InstrumentDisconnected(
+                self.name,
+                f"no reply to opcode {opcode:#x} within {self.reply_timeout_s:g} s on "
+                f"{self.interface}:{self.channel} (base id {self.base_id:#x})",
+            )
+        return replies
+
+    # -- queries ----------------------------------------------------------------------------
+    def read_serial_number(self) -> str:
+        """Opcode 0x5: the board's serial number."""
+        replies = self._query(protocol.OPCODE_SERIAL_NUMBER, {protocol.OPCODE_SERIAL_NUMBER: 8})
+        return protocol.decode_serial_number(replies[protocol.OPCODE_SERIAL_NUMBER])
+
+    def read_firmware_version(self) -> str:
+        """Opcode 0xF: ``"major.minor.build"``."""
+        replies = self._query(
+            protocol.OPCODE_FIRMWARE_VERSION, {protocol.OPCODE_FIRMWARE_VERSION: 4}
+        )
+        return protocol.decode_firmware_version(replies[protocol.OPCODE_FIRMWARE_VERSION])
+
+    def read_counts_per_unit(self) -> tuple[int, int]:
+        """Opcode 0x7: ``(counts per force unit, counts per torque unit)``."""
+        replies = self._query(protocol.OPCODE_COUNTS_PER_UNIT, {protocol.OPCODE_COUNTS_PER_UNIT: 8})
+        return protocol.decode_counts_per_unit(replies[protocol.OPCODE_COUNTS_PER_UNIT])
+
+    def read_unit_codes(self) -> tuple[int, int]:
+        """Opcode 0x8: ``(force unit code, torque unit code)`` (2 = N, 3 = N-m)."""
+        replies = self._query(protocol.OPCODE_UNIT_CODES, {protocol.OPCODE_UNIT_CODES: 2})
+        payload = replies[protocol.OPCODE_UNIT_CODES]
+        return payload[0], payload[1]
+
+    def read_matrix_row(self, row: int) -> np.ndarray:
+        """Opcode 0x2: row ``row`` (0..5, Fx..Tz) of the active calibration matrix, (6,) float."""
+        if not 0 <= row <= 5:
+            raise ValueError(f"matrix row {row} must be 0..5")
+        wanted = {opcode: 8 for opcode in protocol.MATRIX_ROW_REPLY_OPCODES}
+        replies = self._query(protocol.OPCODE_READ_MATRIX_ROW, wanted, bytes([row]))
+        return protocol.decode_matrix_row(
+            tuple(replies[op] for op in protocol.MATRIX_ROW_REPLY_OPCODES)
+        )
+
+    def read_matrix(self) -> np.ndarray:
+        """All six rows: (6, 6) matrix from gauge counts to force/torque counts."""
+        return np.vstack([self.read_matrix_row(row) for row in range(6)])
+
+    def set_active_calibration(self, index: int) -> None:
+        """Opcode 0x6: select calibration ``index`` (0..15); the board echoes the index."""
+        if not 0 <= index <= 15:
+            raise UserInputError("active_calibration", f"{index} must be 0..15")
+        replies = self._query(
+            protocol.OPCODE_SET_ACTIVE_CALIBRATION,
+            {protocol.OPCODE_SET_ACTIVE_CALIBRATION: 1},
+            bytes([index]),
+        )
+        if replies[protocol.OPCODE_SET_ACTIVE_CALIBRATION][0] != index:
+            raise InstrumentReplyError(self.name, f"did not confirm active calibration {index}")
+
+    def read_gauges(self) -> GaugeReading:
+        """Opcode 0x0: one sample of status word and six raw gauges, with saturation flags."""
+        replies = self._query(protocol.OPCODE_READ_GAUGES, _GAUGE_REPLIES)
+        status_word, gauges = protocol.decode_gauge_replies(
+            replies[protocol.OPCODE_READ_GAUGES], replies[protocol.OPCODE_GAUGES_SECOND_REPLY]
+        )
+        return GaugeReading(status_word, gauges, protocol.saturated_gauges(gauges))
+
+    def wrench_from_gauges(
+        self,
+        gauges: np.ndarray,
+        matrix: np.ndarray,
+        counts_per_unit: tuple[int, int],
+        unit_codes: tuple[int, int],
+    ) -> np.ndarray:
+        """Forces and torques, N and N m, from raw gauges (n, 6) with the board's own calibration.
+
+        ``matrix @ gauges`` gives counts; dividing by counts per force (rows 0-2) or per torque
+        (rows 3-5) gives the board's units, converted to SI with the unit codes. No bias is removed.
+        """
+        force_code, torque_code = unit_codes
+        try:
+            to_si = np.array(
+                [protocol.FORCE_UNIT_CODES_TO_N[force_code]] * 3
+                + [protocol.TORQUE_UNIT_CODES_TO_N_M[torque_code]] * 3
+            )
+        except KeyError:
+            raise InstrumentReplyError(self.name, f"unknown unit codes {unit_codes}") from None
+        divisors = np.array([counts_per_unit[0]] * 3 + [counts_per_unit[1]] * 3, dtype=float)
+        return (np.asarray(gauges, dtype=float) @ np.asarray(matrix).T) / divisors * to_si
+
+    # -- polling ----------------------------------------------------------------------------
+    def sample_rate_ceiling_hz(self) -> float:
+        """Guaranteed polled sample rate at this bit rate (worst-case bit stuffing), samples/s."""
+        return protocol.gauge_sample_rate_ceiling_hz(self.bit_rate)
+
+    def check_sample_rate(self, sample_rate_hz: float) -> None:
+        """Refuse a polling rate the bus cannot carry (UserInputError stating the ceiling)."""
+        require_finite("sample_rate_hz", sample_rate_hz)
+        ceiling = self.sample_rate_ceiling_hz()
+        best_case = protocol.gauge_sample_rate_ceiling_hz(self.bit_rate, worst_case_stuffing=False)
+        if not 0 < sample_rate_hz <= ceiling:
+            raise UserInputError(
+                "sample_rate_hz",
+                f"{sample_rate_hz:g} samples/s exceeds the CAN ceiling of {ceiling:.0f} samples/s "
+                f"for "
+                f"{self.name} at {self.bit_rate:g} bit/s ({protocol.gauge_sample_bits()} bits per "
+                f"sample with worst-case stuffing; {best_case:.0f}/s without stuffing)",
+            )
+
+    def start_polling(self, sample_rate_hz: float) -> None:
+        """Start the polling thread at ``sample_rate_hz`` (checked against the bus ceiling)."""
+        self.check_sample_rate(sample_rate_hz)
+        if self._bus is None:
+            raise RuntimeError(f"{self.name}: open() before start_polling()")
+        self._failure = None
+        self._stop_polling.clear()
+        self._poller = threading.Thread(
+            target=self._poll_loop,
+            args=(float(sample_rate_hz),),
+            name=f"{self.name} poller",
+            daemon=True,
+        )
+        self._poller.start()
+
+    def stop_polling(self) -> None:
+        """End the polling thread; raises its error if it ended with one."""
+        poller = self._poller
+        if poller is None:
+            return
+        self._stop_polling.set()
+        poller.join(2.0)
+        self._poller = None
+        if self._failure is not None:
+            raise self._failure
+
+    def get_block(self, timeout_s: float = 1.0) -> GaugeBlock | None:
+        """Next block, or None after ``timeout_s``; raises the poller's error if it failed."""
+        try:
+            block = self.blocks.get(timeout=timeout_s)
+        except queue.Empty:
+            block = None
+        if block is None and self._failure is not None:
+            raise self._failure
+        return block
+
+    def _poll_loop(self, sample_rate_hz: float) -> None:
+        period_s = 1.0 / sample_rate_hz
+        times: list[float] = []
+        rows: list[tuple[int, np.ndarray]] = []
+        next_request_s = time.monotonic()
+        last_block_s = next_request_s
+        missed_in_a_row = 0
+        try:
+            while not self._stop_polling.is_set():
+                delay = next_request_s - time.monotonic()
+                if delay > 0:
+                    time.sleep(delay)
+                sent_s = time.monotonic()
+                next_request_s = max(next_request_s + period_s, sent_s)
+                self._send(protocol.OPCODE_READ_GAUGES)
+                replies = self._receive(_GAUGE_REPLIES, self.reply_timeout_s)
+                if replies is None:
+                    self.missed_replies += 1
+                    missed_in_a_row += 1
+                    if missed_in_a_row >= self.missed_replies_limit:
+                        raise InstrumentDisconnected(
+                            self.name,
+                            f"{missed_in_a_row} gauge requests in a row got no reply on "
+                            f"{self.interface}:{self.channel} (base id {self.base_id:#x})",
+                        )
+                    continue
+                missed_in_a_row = 0
+                times.append(sent_s)
+                rows.append(
+                    protocol.decode_gauge_replies(
+                        replies[protocol.OPCODE_READ_GAUGES],
+                        replies[protocol.OPCODE_GAUGES_SECOND_REPLY],
+                    )
+                )
+                self.samples_polled += 1
+                if sent_s - last_block_s >= self.block_period_s:
+                    self._deliver(times, rows)
+                    times, rows, last_block_s = [], [], sent_s
+            self._deliver(times, rows)
+        except InstrumentDisconnected as error:
+            self._deliver(times, rows)
+            self._failure = error
+            with contextlib.suppress(queue.Full):
+                self.blocks.put_nowait(None)
+
+    def _deliver(self, times: list[float], rows: list[tuple[int, np.ndarray]]) -> None:
+        if not rows:
+            return
+        gauges = np.vstack([gauges for _, gauges in rows])
+        block = GaugeBlock(
+            host_time_s=np.asarray(times),
+            status_words=np.array([status for status, _ in rows], dtype=np.uint16),
+            gauges=gauges,
+            saturated=protocol.saturated_gauges(gauges),
+        )
+        try:
+            self.blocks.put_nowait(block)
+        except queue.Full:
+            self.blocks_dropped += 1
+
+
+_GAUGE_REPLIES = {protocol.OPCODE_READ_GAUGES: 8, protocol.OPCODE_GAUGES_SECOND_REPLY: 6}

@@ -1,0 +1,262 @@
+"""The rig: the instruments a rig file names, their safety limits, connect/close and safe state.
+
+``Rig.from_file(path)`` reads and checks the rig file and its calibration and tunnel-table files;
+``connect()`` opens the drivers (for a simulated rig it first starts the simulated instruments on
+ptys and a virtual CAN channel, and the same drivers connect to them); ``close()`` always brings the
+motor and the tunnel fan to a safe state before closing anything, also after an error. Use it as a
+context manager so that every exit path goes through ``close()``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from pathlib import Path
+
+from ornitail.acquisition.flapping_motor_driver import FlappingMotorDriver
+from ornitail.acquisition.instrument_errors import InstrumentError
+from ornitail.acquisition.netcanoem_driver import NetCanOemDriver
+from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, RigDescription, read_rig_file
+from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
+from ornitail.acquisition.simulated_rig_instruments import SimulatedRigInstruments
+from ornitail.acquisition.strut_pitch_driver import StrutPitchDriver
+from ornitail.acquisition.tunnel_fan_driver import TunnelFanDriver
+from ornitail.calibration.ati_calibration import AtiCalibration
+from ornitail.calibration.tunnel_table import TunnelVelocityTable
+from ornitail.core.errors import UserInputError, require_finite
+
+
+class Rig:
+    """A tunnel rig described by a rig file.
+
+    Attributes
+    ----------
+    description : RigDescription
+        The checked rig file.
+    calibration : AtiCalibration
+        The balance calibration named by ``[balance].calibration``.
+    tunnel_table : TunnelVelocityTable
+        Fan rpm to velocity, from ``[tunnel].table``.
+    fan, strut, motor : drivers, set by :meth:`connect`.
+    balance : SerialDaqDriver | NetCanOemDriver, by ``[balance].route``, set by :meth:`connect`.
+    simulators : SimulatedRigInstruments | None
+        The running simulators of a simulated rig (fault injection in tests), else None.
+    """
+
+    def __init__(self, description: RigDescription) -> None:
+        self.description = description
+        self.calibration = AtiCalibration.from_file(description.calibration_path)
+        self.tunnel_table = TunnelVelocityTable.from_csv(description.tunnel_table_path)
+        limits = description.limits
+        table_low, table_high = (
+            float(self.tunnel_table.velocity_m_s[0]),
+            float(self.tunnel_table.velocity_m_s[-1]),
+        )
+        if limits.velocity_min_m_s < table_low or limits.velocity_max_m_s > table_high:
+            raise UserInputError(
+                f"{description.path}: [limits].velocity_m_s",
+                f"{limits.velocity_min_m_s:g}..{limits.velocity_max_m_s:g} m/s is not inside the "
+                f"tunnel table's range {table_low:g}..{table_high:g} m/s "
+                f"({description.tunnel_table_path})",
+            )
+        self.max_fan_rpm = float(self.tunnel_table.rpm_for_velocity(limits.velocity_max_m_s))
+        self.fan: TunnelFanDriver | None = None
+        self.strut: StrutPitchDriver | None = None
+        self.motor: FlappingMotorDriver | None = None
+        self.balance: SerialDaqDriver | NetCanOemDriver | None = None
+        self.simulators: SimulatedRigInstruments | None = None
+
+    @classmethod
+    def from_file(
+        cls, path: str | Path = DEFAULT_RIG_FILE, *, time_scale: float | None = None
+    ) -> Rig:
+        """Read a rig file; ``time_scale`` overrides ``[rig].time_scale`` of a simulated rig."""
+        description = read_rig_file(path)
+        if time_scale is not None:
+            require_finite("time_scale", time_scale)
+            if time_scale <= 0:
+                raise UserInputError("time_scale", f"{time_scale!r} must be > 0")
+            description = dataclasses.replace(description, time_scale=float(time_scale))
+        return cls(description)
+
+    # -- connection -------------------------------------------------------------------------
+    def connect(self, *, home_strut: bool = True) -> Rig:
+        """Open every instrument (starting the simulators first if simulated); home the strut."""
+        description = self.description
+        limits = description.limits
+        fan_port, strut_port, motor_port = (
+            description.fan.port,
+            description.strut.port,
+            description.motor.port,
+        )
+        daq_port = description.serial_daq.port
+        can_interface, can_channel = description.can.interface, description.can.channel
+        try:
+            if description.simulated:
+                self.simulators = SimulatedRigInstruments.start(
+                    description, self.calibration, self.tunnel_table
+                )
+                fan_port, strut_port = (
+                    self.simulators.fan.port_path,
+                    self.simulators.strut.port_path,
+                )
+                motor_port = self.simulators.motor.port_path
+                if self.simulators.daq_board is not None:
+                    daq_port = self.simulators.daq_board.port_path
+                can_interface, can_channel = "virtual", self.simulators.can_channel or can_channel
+            self.fan = TunnelFanDriver(
+                fan_port, max_rpm=self.max_fan_rpm, baud=description.fan.baud
+            )
+            self.fan.open()
+            self.motor = FlappingMotorDriver(
+                motor_port, max_rpm=limits.max_motor_rpm, baud=description.motor.baud
+            )
+            self.motor.open()
+            self.strut = StrutPitchDriver(
+                strut_port,
+                pitch_min_rad=limits.pitch_min_rad,
+                pitch_max_rad=limits.pitch_max_rad,
+                baud=description.strut.baud,
+            )
+            self.strut.open()
+            if description.balance_route == "serial_daq":
+                self.balance = SerialDaqDriver(daq_port, baud=description.serial_daq.baud)
+            else:
+                self.balance = NetCanOemDriver(
+                    interface=can_interface,
+                    channel=can_channel,
+                    bit_rate=description.can.bit_rate,
+                    base_id=description.can.base_id,
+                )
+            self.balance.open()
+            if home_strut:
+                self.strut.home(timeout_s=max(5.0, 60.0 / description.time_scale))
+        except BaseException:
+            self.close(raise_errors=False)
+            raise
+        return self
+
+    def __enter__(self) -> Rig:
+        return self.connect()
+
+    def __exit__(self, exc_type: object, *exc_info: object) -> None:
+        self.close(raise_errors=exc_type is None)
+
+    def safe_state(self) -> list[InstrumentError]:
+        """Motor off, fan to zero, strut halted; every step is tried. Returns the errors met."""
+        errors: list[InstrumentError] = []
+        for driver in (self.motor, self.fan, self.strut):
+            if driver is not None and driver.connection.is_open:
+                try:
+                    driver.safe_state()
+                except InstrumentError as error:
+                    errors.append(error)
+        return errors
+
+    def close(self, *, raise_errors: bool = True) -> None:
+        """Safe state first, then close every driver and simulator; raise the first error last."""
+        errors = self.safe_state()
+        if self.balance is not None:
+            try:
+                self.balance.close()
+            except InstrumentError as error:
+                errors.append(error)
+        for driver in (self.motor, self.fan, self.strut):
+            if driver is not None:
+                driver.close()
+        if self.simulators is not None:
+            self.simulators.close()
+            self.simulators = None
+        self.fan = self.strut = self.motor = self.balance = None
+        if errors and raise_errors:
+            raise errors[0]
+
+    # -- set points -------------------------------------------------------------------------
+    def _connected(self, driver):
+        if driver is None:
+            raise RuntimeError(
+                f"rig {self.description.name!r} is not connected; call connect() first"
+            )
+        return driver
+
+    def set_tunnel_velocity(self, velocity_m_s: float) -> None:
+        """Set the fan for jet velocity ``velocity_m_s`` (m/s) through the tunnel table."""
+        require_finite("velocity_m_s", velocity_m_s)
+        limits = self.description.limits
+        if not limits.velocity_min_m_s <= velocity_m_s <= limits.velocity_max_m_s:
+            raise UserInputError(
+                "velocity_m_s",
+                f"{velocity_m_s:g} m/s is outside the rig limit {limits.velocity_min_m_s:g}.."
+                f"{limits.velocity_max_m_s:g} m/s "
+                f"([limits].velocity_m_s in {self.description.path})",
+            )
+        self._connected(self.fan).set_rpm(float(self.tunnel_table.rpm_for_velocity(velocity_m_s)))
+
+    def read_tunnel_velocity_m_s(self) -> float:
+        """Jet velocity from the measured fan rpm and the tunnel table, m/s."""
+        rpm = self._connected(self.fan).read_rpm()
+        rpm = min(
+            max(rpm, float(self.tunnel_table.fan_rpm[0])), float(self.tunnel_table.fan_rpm[-1])
+        )
+        return float(self.tunnel_table.velocity_m_s_at_rpm(rpm))
+
+    def set_pitch(self, pitch_rad: float) -> None:
+        """Set the strut pitch angle, rad (limits checked by the strut driver)."""
+        self._connected(self.strut).set_pitch(pitch_rad)
+
+    def read_pitch_rad(self) -> float:
+        """Measured strut pitch angle, rad."""
+        return self._connected(self.strut).read_pitch_rad()
+
+    def set_flapping_frequency(self, flapping_frequency_hz: float) -> None:
+        """Set the motor speed for ``flapping_frequency_hz`` (Hz): rpm = f * 60 * gear ratio."""
+        require_finite("flapping_frequency_hz", flapping_frequency_hz)
+        limits = self.description.limits
+        if (
+            not limits.flapping_frequency_min_hz
+            <= flapping_frequency_hz
+            <= limits.flapping_frequency_max_hz
+        ):
+            raise UserInputError(
+                "flapping_frequency_hz",
+                f"{flapping_frequency_hz:g} Hz is outside the rig limit "
+                f"{limits.flapping_frequency_min_hz:g}..{limits.flapping_frequency_max_hz:g} Hz "
+                f"([limits].flapping_frequency_hz in {self.description.path})",
+            )
+        self._connected(self.motor).set_target_rpm(
+            flapping_frequency_hz * 60.0 * self.description.gear_ratio
+        )
+
+    def read_flapping_frequency_hz(self) -> float:
+        """Flapping frequency from the measured motor speed, Hz."""
+        return self._connected(self.motor).read_rpm() / 60.0 / self.description.gear_ratio
+
+    def wait_simulated_s(self, simulated_seconds: float) -> None:
+        """Sleep ``simulated_seconds`` of rig time (wall time / time scale on a simulated rig)."""
+        scale = self.description.time_scale if self.description.simulated else 1.0
+        time.sleep(max(0.0, simulated_seconds) / scale)
+
+    # -- balance ----------------------------------------------------------------------------
+    def start_balance(self, sample_rate_hz: float | None = None) -> None:
+        """Start the DAQ stream or CAN polling at ``sample_rate_hz`` (default: the rig file's)."""
+        balance = self._connected(self.balance)
+        if isinstance(balance, SerialDaqDriver):
+            balance.set_sample_rate(sample_rate_hz or self.description.serial_daq.sample_rate_hz)
+            balance.start()
+        else:
+            balance.start_polling(sample_rate_hz or self.description.can.sample_rate_hz)
+
+    def stop_balance(self) -> None:
+        """Stop the balance stream or polling."""
+        balance = self._connected(self.balance)
+        if isinstance(balance, SerialDaqDriver):
+            balance.stop()
+        else:
+            balance.stop_polling()
+
+    @property
+    def pitch_limits_deg(self) -> tuple[float, float]:
+        """The rig's pitch limits in degrees (for display)."""
+        limits = self.description.limits
+        return math.degrees(limits.pitch_min_rad), math.degrees(limits.pitch_max_rad)

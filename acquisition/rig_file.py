@@ -1,0 +1,301 @@
+"""Reading and checking a rig file (TOML): instruments, ports, calibration files, safety limits.
+
+The format is documented in ``docs/rig-file.md``. Every mistake raises ``UserInputError`` naming the
+file and the field (``rig.toml: [limits].pitch_deg``). Paths inside the file are relative to the rig
+file's folder. Unknown sections and keys are refused, so a typo cannot silently drop a limit.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from ornitail.acquisition.daq_protocol import DEFAULT_BAUD, link_ceiling_frames_per_s
+from ornitail.acquisition.line_instrument_connection import DEFAULT_LINE_BAUD
+from ornitail.acquisition.netcanoem_protocol import DEFAULT_BASE_ID, gauge_sample_rate_ceiling_hz
+from ornitail.core.errors import UserInputError
+
+DEFAULT_RIG_FILE = Path(__file__).parent / "data" / "simulated_rig.toml"
+BALANCE_ROUTES = ("serial_daq", "can")
+
+_ALLOWED_KEYS = {
+    "rig": {"name", "simulated", "time_scale", "seed"},
+    "balance": {"route", "calibration", "serial_daq", "can"},
+    "balance.serial_daq": {"port", "baud", "sample_rate_hz"},
+    "balance.can": {"interface", "channel", "bit_rate", "base_id", "sample_rate_hz"},
+    "tunnel": {"table"},
+    "fan": {"port", "baud"},
+    "strut": {"port", "baud"},
+    "motor": {"port", "baud", "gear_ratio"},
+    "limits": {"pitch_deg", "velocity_m_s", "flapping_frequency_hz", "max_motor_rpm"},
+}
+_REQUIRED_SECTIONS = ("rig", "balance", "tunnel", "fan", "strut", "motor", "limits")
+
+
+@dataclass(frozen=True)
+class SerialDaqSettings:
+    """``[balance.serial_daq]``: port, baud and sample rate (Hz) of the ORNI-DAQ9 board."""
+
+    port: str
+    baud: int
+    sample_rate_hz: float
+
+
+@dataclass(frozen=True)
+class CanSettings:
+    """``[balance.can]``: python-can interface, channel, bit rate (bit/s), base id, rate (Hz)."""
+
+    interface: str
+    channel: str
+    bit_rate: int
+    base_id: int
+    sample_rate_hz: float
+
+
+@dataclass(frozen=True)
+class LinePortSettings:
+    """Port and baud of a line-protocol instrument (fan, strut, motor)."""
+
+    port: str
+    baud: int
+
+
+@dataclass(frozen=True)
+class SafetyLimits:
+    """``[limits]`` in SI: pitch (rad), velocity (m/s), flapping frequency (Hz), motor rpm."""
+
+    pitch_min_rad: float
+    pitch_max_rad: float
+    velocity_min_m_s: float
+    velocity_max_m_s: float
+    flapping_frequency_min_hz: float
+    flapping_frequency_max_hz: float
+    max_motor_rpm: float
+
+
+@dataclass(frozen=True)
+class RigDescription:
+    """Everything a rig file says, checked, with paths made absolute."""
+
+    path: Path
+    name: str
+    simulated: bool
+    time_scale: float
+    seed: int
+    balance_route: str
+    calibration_path: Path
+    serial_daq: SerialDaqSettings
+    can: CanSettings
+    tunnel_table_path: Path
+    fan: LinePortSettings
+    strut: LinePortSettings
+    motor: LinePortSettings
+    gear_ratio: float
+    limits: SafetyLimits
+
+
+class _Fields:
+    """Typed access to one table of the rig file, with errors naming file and field."""
+
+    def __init__(self, path: Path, section: str, table: Any) -> None:
+        self.path = path
+        self.section = section
+        if not isinstance(table, dict):
+            raise UserInputError(f"{path}: [{section}]", "must be a table (a [section] header)")
+        self.table = table
+        unknown = sorted(set(table) - _ALLOWED_KEYS[section])
+        if unknown:
+            raise UserInputError(
+                f"{path}: [{section}].{unknown[0]}",
+                f"unknown key; allowed keys are {', '.join(sorted(_ALLOWED_KEYS[section]))}",
+            )
+
+    def where(self, key: str) -> str:
+        return f"{self.path}: [{self.section}].{key}"
+
+    def get(self, key: str, default: Any = None) -> Any:
+        if key not in self.table:
+            if default is None:
+                raise UserInputError(self.where(key), "missing")
+            return default
+        return self.table[key]
+
+    def text(self, key: str, default: str | None = None) -> str:
+        value = self.get(key, default)
+        if not isinstance(value, str) or not value.strip():
+            raise UserInputError(self.where(key), f"{value!r} must be a non-empty string")
+        return value
+
+    def boolean(self, key: str, default: bool | None = None) -> bool:
+        value = self.get(key, default)
+        if not isinstance(value, bool):
+            raise UserInputError(self.where(key), f"{value!r} must be true or false")
+        return value
+
+    def number(
+        self,
+        key: str,
+        default: float | None = None,
+        *,
+        minimum: float | None = None,
+        positive: bool = False,
+    ) -> float:
+        value = self.get(key, default)
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, int | float)
+            or not math.isfinite(value)
+        ):
+            raise UserInputError(self.where(key), f"{value!r} must be a finite number")
+        if positive and value <= 0:
+            raise UserInputError(self.where(key), f"{value!r} must be > 0")
+        if minimum is not None and value < minimum:
+            raise UserInputError(self.where(key), f"{value!r} must be >= {minimum:g}")
+        return float(value)
+
+    def integer(
+        self, key: str, default: int | None = None, *, minimum: int = 0, maximum: int | None = None
+    ) -> int:
+        value = self.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise UserInputError(self.where(key), f"{value!r} must be a whole number")
+        if value < minimum or (maximum is not None and value > maximum):
+            upper = "" if maximum is None else f"..{maximum}"
+            raise UserInputError(self.where(key), f"{value} must be in {minimum}{upper}")
+        return value
+
+    def interval(self, key: str) -> tuple[float, float]:
+        value = self.get(key)
+        if (
+            not isinstance(value, list)
+            or len(value) != 2
+            or any(
+                isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v)
+                for v in value
+            )
+        ):
+            raise UserInputError(
+                self.where(key), f"{value!r} must be [minimum, maximum], two finite numbers"
+            )
+        low, high = float(value[0]), float(value[1])
+        if low >= high:
+            raise UserInputError(self.where(key), f"minimum {low:g} must be below maximum {high:g}")
+        return low, high
+
+    def file(self, key: str) -> Path:
+        relative = self.text(key)
+        resolved = (self.path.parent / relative).resolve()
+        if not resolved.is_file():
+            raise UserInputError(
+                self.where(key), f"file {relative!r} not found (looked for {resolved})"
+            )
+        return resolved
+
+
+def read_rig_file(path: str | Path) -> RigDescription:
+    """Read and check a rig file; see ``docs/rig-file.md``."""
+    path = Path(path)
+    try:
+        document = tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as error:
+        raise UserInputError(
+            str(path), f"cannot read rig file ({error.strerror or error})"
+        ) from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+        raise UserInputError(str(path), f"not valid TOML: {error}") from None
+    unknown = sorted(set(document) - set(_REQUIRED_SECTIONS))
+    if unknown:
+        raise UserInputError(
+            f"{path}: [{unknown[0]}]", f"unknown section; allowed: {', '.join(_REQUIRED_SECTIONS)}"
+        )
+    for section in _REQUIRED_SECTIONS:
+        if section not in document:
+            raise UserInputError(f"{path}: [{section}]", "section missing")
+
+    rig = _Fields(path, "rig", document["rig"])
+    balance = _Fields(path, "balance", document["balance"])
+    route = balance.text("route")
+    if route not in BALANCE_ROUTES:
+        raise UserInputError(
+            balance.where("route"), f"{route!r} must be one of {', '.join(BALANCE_ROUTES)}"
+        )
+    simulated = rig.boolean("simulated", False)
+    daq = _Fields(path, "balance.serial_daq", balance.table.get("serial_daq", {}))
+    can = _Fields(path, "balance.can", balance.table.get("can", {}))
+    needs_daq = route == "serial_daq"
+    serial_daq = SerialDaqSettings(
+        port=daq.text("port", "simulated" if simulated or not needs_daq else None),
+        baud=daq.integer("baud", DEFAULT_BAUD, minimum=1200),
+        sample_rate_hz=daq.number("sample_rate_hz", 10_000.0, positive=True),
+    )
+    can_settings = CanSettings(
+        interface=can.text("interface", "virtual" if simulated or needs_daq else None),
+        channel=can.text("channel", "ornitail-rig" if simulated or needs_daq else None),
+        bit_rate=can.integer("bit_rate", 1_000_000, minimum=10_000, maximum=2_000_000),
+        base_id=can.integer("base_id", DEFAULT_BASE_ID, minimum=0, maximum=0x7F),
+        sample_rate_hz=can.number("sample_rate_hz", 1000.0, positive=True),
+    )
+    if needs_daq and serial_daq.sample_rate_hz > link_ceiling_frames_per_s(serial_daq.baud):
+        raise UserInputError(
+            daq.where("sample_rate_hz"),
+            f"{serial_daq.sample_rate_hz:g} Hz exceeds the serial link ceiling "
+            f"{link_ceiling_frames_per_s(serial_daq.baud):g} Hz at {serial_daq.baud} baud",
+        )
+    can_ceiling = gauge_sample_rate_ceiling_hz(can_settings.bit_rate)
+    if not needs_daq and can_settings.sample_rate_hz > can_ceiling:
+        raise UserInputError(
+            can.where("sample_rate_hz"),
+            f"{can_settings.sample_rate_hz:g} samples/s exceeds the CAN ceiling {can_ceiling:.0f} "
+            f"samples/s at {can_settings.bit_rate} bit/s",
+        )
+    tunnel = _Fields(path, "tunnel", document["tunnel"])
+    fan = _Fields(path, "fan", document["fan"])
+    strut = _Fields(path, "strut", document["strut"])
+    motor = _Fields(path, "motor", document["motor"])
+    limits = _Fields(path, "limits", document["limits"])
+
+    def line_port(fields: _Fields) -> LinePortSettings:
+        return LinePortSettings(
+            port=fields.text("port", "simulated" if simulated else None),
+            baud=fields.integer("baud", DEFAULT_LINE_BAUD, minimum=1200),
+        )
+
+    pitch_min_deg, pitch_max_deg = limits.interval("pitch_deg")
+    velocity_min, velocity_max = limits.interval("velocity_m_s")
+    frequency_min, frequency_max = limits.interval("flapping_frequency_hz")
+    if velocity_min < 0:
+        raise UserInputError(
+            limits.where("velocity_m_s"), f"minimum {velocity_min:g} m/s must be >= 0"
+        )
+    if frequency_min < 0:
+        raise UserInputError(
+            limits.where("flapping_frequency_hz"), f"minimum {frequency_min:g} Hz must be >= 0"
+        )
+    return RigDescription(
+        path=path.resolve(),
+        name=rig.text("name", path.stem),
+        simulated=simulated,
+        time_scale=rig.number("time_scale", 1.0, positive=True),
+        seed=rig.integer("seed", 0),
+        balance_route=route,
+        calibration_path=balance.file("calibration"),
+        serial_daq=serial_daq,
+        can=can_settings,
+        tunnel_table_path=tunnel.file("table"),
+        fan=line_port(fan),
+        strut=line_port(strut),
+        motor=line_port(motor),
+        gear_ratio=motor.number("gear_ratio", 21.33, positive=True),
+        limits=SafetyLimits(
+            pitch_min_rad=math.radians(pitch_min_deg),
+            pitch_max_rad=math.radians(pitch_max_deg),
+            velocity_min_m_s=velocity_min,
+            velocity_max_m_s=velocity_max,
+            flapping_frequency_min_hz=frequency_min,
+            flapping_frequency_max_hz=frequency_max,
+            max_motor_rpm=limits.number("max_motor_rpm", positive=True),
+        ),
+    )

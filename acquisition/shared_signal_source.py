@@ -1,0 +1,120 @@
+"""A lock-guarded handle on one ``TunnelSignalSource`` shared by several simulated instruments.
+
+The fan, strut and motor simulators set the operating point from their own threads while the balance
+simulator (DAQ board or NETCANOEM) draws samples from its thread; every call goes through one lock.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from typing import Any
+
+import numpy as np
+
+
+class SharedTunnelSignals:
+    """Thread-safe access to a tunnel signal source producing (n, 9) volts at ``sample_rate_hz``.
+
+    Parameters
+    ----------
+    source : object with ``set_operating_point(**kw)``, ``next_block(n)``, ``motor_rpm``, ``time_s``
+        Normally :class:`ornitail.sim.tunnel.TunnelSignalSource`.
+    sample_rate_hz : float
+        The rate the source was built with, Hz.
+    """
+
+    def __init__(self, source: Any, sample_rate_hz: float) -> None:
+        self._source = source
+        self.sample_rate_hz = float(sample_rate_hz)
+        self._lock = threading.Lock()
+        self._resampling_phase = 0.0
+        self._consumed_samples = 0
+        self._last_sample = np.zeros(9)
+
+    @classmethod
+    def from_simulator(
+        cls,
+        *,
+        seed: int = 0,
+        sample_rate_hz: float = 10_000.0,
+        configuration: Any = None,
+        effects: Any = None,
+    ) -> SharedTunnelSignals:
+        """Build the project's ``TunnelSignalSource`` and wrap it."""
+        from ornitail.sim.tunnel import TunnelSignalSource
+
+        source = TunnelSignalSource(
+            configuration=configuration, effects=effects, seed=seed, sample_rate_hz=sample_rate_hz
+        )
+        return cls(source, sample_rate_hz)
+
+    def set_operating_point(self, **operating_point: Any) -> None:
+        """Forward to the source's ``set_operating_point`` (pitch_rad, tunnel_velocity_m_s, ...)."""
+        with self._lock:
+            self._source.set_operating_point(**operating_point)
+
+    @property
+    def motor_rpm(self) -> float:
+        """The simulated motor speed the source currently flaps at, rev/min."""
+        with self._lock:
+            return float(self._source.motor_rpm)
+
+    def operating_point(self) -> dict[str, float | bool]:
+        """Current pitch_rad, tunnel_velocity_m_s, flapping_frequency_hz and tail_attached."""
+        with self._lock:
+            return {
+                name: getattr(self._source, name)
+                for name in (
+                    "pitch_rad",
+                    "tunnel_velocity_m_s",
+                    "flapping_frequency_hz",
+                    "tail_attached",
+                )
+            }
+
+    @property
+    def time_s(self) -> float:
+        """Simulated time of the source's next sample, s."""
+        with self._lock:
+            return float(self._source.time_s)
+
+    def next_block_at_rate(self, n_samples: int, sample_rate_hz: float) -> np.ndarray:
+        """Return the next (n, 9) volts sampled at ``sample_rate_hz``.
+
+        At the source's own rate this is ``next_block``; at another rate every output sample is the
+        source sample at or just before its time (sample-and-hold, no anti-alias filter), and the
+        source advances by the same span of time.
+        """
+        with self._lock:
+            if sample_rate_hz == self.sample_rate_hz:
+                block = np.asarray(self._source.next_block(n_samples), dtype=float)
+                self._consumed_samples += n_samples
+            else:
+                ratio = self.sample_rate_hz / sample_rate_hz
+                positions = self._resampling_phase + ratio * np.arange(n_samples)
+                needed = int(math.floor(positions[-1])) + 1 if n_samples else 0
+                source_block = np.asarray(self._source.next_block(needed), dtype=float)
+                block = source_block[np.floor(positions).astype(np.int64)]
+                self._resampling_phase = self._resampling_phase + ratio * n_samples - needed
+                self._consumed_samples += needed
+            if block.shape[0]:
+                self._last_sample = block[-1].copy()
+            return block
+
+    def sample_at(self, simulated_time_s: float, chunk_samples: int = 20_000) -> np.ndarray:
+        """Advance the source to ``simulated_time_s`` and return its latest (9,) sample, V.
+
+        Used by polled instruments (NETCANOEM) that read one sample per request.
+        """
+        with self._lock:
+            due = int(simulated_time_s * self.sample_rate_hz) - self._consumed_samples
+            if self._consumed_samples == 0:
+                due = max(due, 1)
+            while due > 0:
+                count = min(due, chunk_samples)
+                block = np.asarray(self._source.next_block(count), dtype=float)
+                self._last_sample = block[-1].copy()
+                self._consumed_samples += count
+                due -= count
+            return self._last_sample.copy()

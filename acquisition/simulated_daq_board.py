@@ -1,0 +1,262 @@
+"""Simulated ORNI-DAQ9 board behind a pty, fed by the tunnel simulator in (scaled) real time.
+
+The board runs in its own thread: it answers the ASCII commands of ``docs/daq-protocol.md`` and,
+while streaming, writes the frames that are due on the :class:`SimulatedClock` in blocks every
+``block_period_s`` of wall time. Samples come from a :class:`SharedTunnelSignals`, are quantised to
+int16 ADC counts (clipped, with the overrange bit set) and the Hall voltage is thresholded to a bit.
+If the driver does not read, the pty buffer fills and the board drops samples it cannot send (the
+counters then show the gap), as a real board's FIFO would.
+
+Fault injection (for tests): :meth:`inject_garbage`, :meth:`truncate_next_frame`,
+:meth:`drop_samples`, :meth:`corrupt_next_crc`, :meth:`unplug`. Each acts on the next block written.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import deque
+
+import numpy as np
+
+from ornitail.acquisition.daq_protocol import (
+    ADC_RANGE_V,
+    CHANNEL_NAMES,
+    DEFAULT_BAUD,
+    FRAME_LENGTH_BYTES,
+    MINIMUM_SAMPLE_RATE_HZ,
+    STATUS_BIT_HALL,
+    STATUS_BIT_OVERRANGE,
+    STOP_MARKER,
+    VOLTS_PER_COUNT,
+    DaqIdentity,
+    encode_frames,
+    format_identity,
+    link_ceiling_frames_per_s,
+)
+from ornitail.acquisition.pty_transport import PseudoTerminalPair
+from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
+from ornitail.acquisition.simulated_clock import SimulatedClock
+
+HALL_THRESHOLD_V = 1.65  # half of the 3.3 V logic level of the Hall sensor
+HALL_HIGH_V = 3.3
+FIRMWARE_VERSION = "1.0.0"
+MODEL = "ORNI-DAQ9"
+
+
+class SimulatedDaqBoard:
+    """An ORNI-DAQ9 board simulator; the driver connects to :attr:`port_path`.
+
+    Parameters
+    ----------
+    signals : SharedTunnelSignals
+        Where the nine channel voltages come from.
+    clock : SimulatedClock
+        Paces the sample clock (``time_scale`` times real time).
+    sample_rate_hz : float
+        Initial sampling rate (the driver may change it with ``RATE``), Hz.
+    baud : int
+        The line rate the board claims; it sets the ``max_rate_hz`` it accepts.
+    block_period_s : float
+        Wall-clock interval between writes, s.
+    """
+
+    def __init__(
+        self,
+        signals: SharedTunnelSignals,
+        clock: SimulatedClock,
+        *,
+        sample_rate_hz: float = 10_000.0,
+        baud: int = DEFAULT_BAUD,
+        serial_number: str = "SIM00001",
+        block_period_s: float = 0.005,
+    ) -> None:
+        self.signals = signals
+        self.clock = clock
+        self.sample_rate_hz = float(sample_rate_hz)
+        self.identity = DaqIdentity(
+            model=MODEL,
+            serial_number=serial_number,
+            firmware=FIRMWARE_VERSION,
+            channels=CHANNEL_NAMES,
+            volts_per_count=(VOLTS_PER_COUNT,) * 8,
+            range_v=ADC_RANGE_V,
+            hall_high_v=HALL_HIGH_V,
+            baud=int(baud),
+            max_rate_hz=link_ceiling_frames_per_s(baud),
+        )
+        self.block_period_s = block_period_s
+        self._pty = PseudoTerminalPair.open_raw()
+        self.port_path = self._pty.slave_path
+        self._lock = threading.Lock()
+        self._faults: deque[tuple[str, int | bytes]] = deque()
+        self._closing = threading.Event()
+        self._unplug_requested = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="simulated DAQ board", daemon=True)
+        self._streaming = False
+        self._next_counter = 0
+        self._stream_start_s = 0.0
+        self._samples_due_before = 0
+        self._outgoing = b""
+        self.samples_sent = 0
+        self.samples_dropped_by_board = 0
+        self.unplugged = False
+
+    # -- lifecycle --------------------------------------------------------------------------
+    def start(self) -> SimulatedDaqBoard:
+        """Start the board's thread; returns self."""
+        self._thread.start()
+        return self
+
+    def close(self) -> None:
+        """Stop the thread and close the pty."""
+        self._closing.set()
+        if self._thread.is_alive():
+            self._thread.join(2.0)
+        self._pty.close()
+
+    def __enter__(self) -> SimulatedDaqBoard:
+        return self.start()
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+    # -- fault injection --------------------------------------------------------------------
+    def inject_garbage(self, data: bytes) -> None:
+        """Write ``data`` between two frames of the next block."""
+        self._add_fault("garbage", bytes(data))
+
+    def truncate_next_frame(self, keep_bytes: int = 10) -> None:
+        """Send only the first ``keep_bytes`` bytes of one frame of the next block."""
+        self._add_fault("truncate", int(keep_bytes))
+
+    def drop_samples(self, count: int) -> None:
+        """Skip ``count`` counters (samples that are taken but never sent)."""
+        self._add_fault("drop", int(count))
+
+    def corrupt_next_crc(self, count: int = 1) -> None:
+        """Flip a CRC bit of ``count`` frames of the next block."""
+        self._add_fault("crc", int(count))
+
+    def unplug(self) -> None:
+        """Close the pty master: the driver's port fails as if the USB cable were pulled."""
+        self._unplug_requested.set()
+
+    @property
+    def faults_pending(self) -> int:
+        """Faults injected but not yet written (they go out with the next block of frames)."""
+        with self._lock:
+            return len(self._faults)
+
+    def _add_fault(self, kind: str, value: int | bytes) -> None:
+        with self._lock:
+            self._faults.append((kind, value))
+
+    # -- board loop -------------------------------------------------------------------------
+    def _run(self) -> None:
+        command_buffer = b""
+        while not self._closing.is_set():
+            if self._unplug_requested.is_set():
+                self.unplugged = True
+                self._pty.close_master()
+                return
+            incoming = self._pty.read_available(self.block_period_s)
+            if incoming is None:
+                return
+            command_buffer += incoming
+            while b"\n" in command_buffer:
+                line, command_buffer = command_buffer.split(b"\n", 1)
+                self._handle_command(line.decode("ascii", errors="replace").strip())
+            if self._streaming:
+                self._write_due_frames()
+            self._flush_outgoing()
+
+    def _reply(self, text: str) -> None:
+        self._outgoing += text.encode("ascii") + b"\n"
+
+    def _handle_command(self, command: str) -> None:
+        words = command.split()
+        if not words:
+            return
+        keyword = words[0].upper()
+        if self._streaming and keyword != "STOP":
+            return  # while streaming only STOP is heard, as documented
+        if keyword == "ID?":
+            self._reply(format_identity(self.identity))
+        elif keyword == "RATE?":
+            self._reply(f"RATE {self.sample_rate_hz:g}")
+        elif keyword == "RATE" and len(words) == 2:
+            self._set_rate(words[1])
+        elif keyword == "START":
+            self._reply("OK")
+            self._streaming = True
+            self._stream_start_s = self.clock.now_s()
+            self._samples_due_before = 0
+        elif keyword == "STOP":
+            if self._streaming:
+                self._write_due_frames()
+            self._streaming = False
+            self._outgoing += STOP_MARKER
+        else:
+            self._reply(f"ERR unknown command {command!r}")
+
+    def _set_rate(self, text: str) -> None:
+        try:
+            rate = float(text)
+        except ValueError:
+            self._reply(f"ERR rate {text!r} is not a number")
+            return
+        if not MINIMUM_SAMPLE_RATE_HZ <= rate <= self.identity.max_rate_hz:
+            self._reply(
+                f"ERR rate {rate:g} outside "
+                f"{MINIMUM_SAMPLE_RATE_HZ:g}..{self.identity.max_rate_hz:g} Hz"
+            )
+            return
+        self.sample_rate_hz = rate
+        self._reply("OK")
+
+    def _write_due_frames(self) -> None:
+        elapsed_s = self.clock.now_s() - self._stream_start_s
+        due = int(elapsed_s * self.sample_rate_hz) - self._samples_due_before
+        if due <= 0:
+            return
+        self._samples_due_before += due
+        volts = self.signals.next_block_at_rate(due, self.sample_rate_hz)
+        scaled = np.rint(volts[:, :8] / VOLTS_PER_COUNT)
+        counts = np.clip(scaled, -32768, 32767).astype(np.int16)
+        status = np.where(volts[:, 8] > HALL_THRESHOLD_V, STATUS_BIT_HALL, 0).astype(np.uint8)
+        status |= np.where(np.any(scaled != counts, axis=1), STATUS_BIT_OVERRANGE, 0).astype(
+            np.uint8
+        )
+        counters = self._next_counter + np.arange(due, dtype=np.int64)
+        with self._lock:
+            faults = list(self._faults)
+            self._faults.clear()
+        dropped = sum(int(value) for kind, value in faults if kind == "drop")
+        if dropped:  # the skipped counters are simply never sent
+            counters = counters + dropped
+        self._next_counter = int(counters[-1]) + 1
+        data = encode_frames(counters, counts, status)
+        data = self._apply_faults(data, faults)
+        if len(self._outgoing) > 1_000_000:  # pty full for a long time: board FIFO overflows
+            self.samples_dropped_by_board += due
+            return
+        self._outgoing += data
+        self.samples_sent += due
+
+    def _apply_faults(self, data: bytes, faults: list[tuple[str, int | bytes]]) -> bytes:
+        frames = bytearray(data)
+        middle = (len(frames) // FRAME_LENGTH_BYTES // 2) * FRAME_LENGTH_BYTES
+        for kind, value in faults:
+            if kind == "crc":
+                for index in range(min(int(value), len(frames) // FRAME_LENGTH_BYTES)):
+                    frames[index * FRAME_LENGTH_BYTES + 23] ^= 0x01
+            elif kind == "truncate" and len(frames) >= FRAME_LENGTH_BYTES:
+                del frames[middle + int(value) : middle + FRAME_LENGTH_BYTES]
+            elif kind == "garbage":
+                frames[middle:middle] = value
+        return bytes(frames)
+
+    def _flush_outgoing(self) -> None:
+        if self._outgoing and not self.unplugged:
+            written = self._pty.write_some(self._outgoing)
+            self._outgoing = self._outgoing[written:]

@@ -1,0 +1,59 @@
+"""Driver of the wind-tunnel fan controller (ORNI-FAN, docs/instrument-protocols.md)."""
+
+from __future__ import annotations
+
+from ornitail.acquisition.line_instrument_connection import (
+    DEFAULT_LINE_BAUD,
+    LineInstrumentConnection,
+)
+from ornitail.core.errors import UserInputError, require_finite
+
+
+class TunnelFanDriver:
+    """Sets and reads the tunnel fan speed, rev/min.
+
+    Parameters
+    ----------
+    port : str
+        Serial device or pty path.
+    max_rpm : float
+        Highest fan speed the rig allows (from the rig's velocity limit), rev/min.
+    """
+
+    def __init__(
+        self, port: str, *, max_rpm: float, name: str = "tunnel fan", baud: int = DEFAULT_LINE_BAUD
+    ) -> None:
+        self.name = name
+        self.max_rpm = float(max_rpm)
+        self.connection = LineInstrumentConnection(port, name=name, baud=baud)
+
+    def open(self) -> str:
+        """Open the port and return the controller's ``ID?`` reply."""
+        self.connection.open()
+        return self.connection.query("ID?")
+
+    def close(self) -> None:
+        """Close the port (does not stop the fan; call :meth:`safe_state` first)."""
+        self.connection.close()
+
+    def set_rpm(self, fan_rpm: float) -> None:
+        """Command fan speed ``fan_rpm`` (rev/min); refused outside 0..max_rpm before sending."""
+        require_finite("fan_rpm", fan_rpm)
+        if not 0.0 <= fan_rpm <= self.max_rpm:
+            raise UserInputError(
+                "fan_rpm",
+                f"{fan_rpm:g} rpm is outside the rig limit 0..{self.max_rpm:g} rpm ({self.name})",
+            )
+        self.connection.command(f"RPM {fan_rpm:.1f}")
+
+    def read_rpm(self) -> float:
+        """Measured fan speed, rev/min."""
+        return self.connection.query_value("RPM?", "RPM")
+
+    def read_target_rpm(self) -> float:
+        """Commanded fan speed, rev/min."""
+        return self.connection.query_value("TARGET?", "TARGET")
+
+    def safe_state(self) -> None:
+        """Bring the fan to zero speed."""
+        self.connection.command("STOP")

@@ -1,0 +1,104 @@
+"""Cycle-averaged loads of one tunnel set point, in the body frame.
+
+Gauge voltages are averaged over each flapping cycle first (the calibration is linear, so averaging before the
+matrix is exact and ten times cheaper), the wind-off tare voltages of the same pitch and tail state are subtracted
+(this removes the weight, which rotates with pitch, and the gauges' zero offsets), and the calibration with its
+tool transform (sensor centre -> vehicle reference point, sensor axes -> body axes of docs/frames.md) gives
+forces and moments. Spread is over cycles: the study's error bars are 2 sigma over cycles.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ornitail.balance.cycle_averages import cycle_means
+from ornitail.balance.hall_cycles import HallEdgeSettings, flap_cycles
+from ornitail.calibration.ati_calibration import AtiCalibration
+
+BODY_LOAD_NAMES = ("x_n", "y_n", "z_n", "l_n_m", "m_n_m", "n_n_m")
+"""Body-frame forces X, Y, Z (N) and moments L, M, N (N m) about the reference point; M positive nose-down."""
+
+
+@dataclass(frozen=True)
+class CycleAveragedLoads:
+    """Loads of one set point averaged over each accepted flapping cycle.
+
+    Attributes
+    ----------
+    per_cycle : numpy.ndarray
+        Shape (n_cycles, 6): X, Y, Z (N) and L, M, N (N m) of each cycle, body frame (``BODY_LOAD_NAMES``).
+    mean, spread, standard_error : numpy.ndarray
+        Shape (6,): mean over cycles, sample standard deviation over cycles, and standard error of the mean.
+    flapping_frequency_hz : float
+        Mean flapping frequency over the accepted cycles, from the Hall line.
+    rejected_cycles : int
+        Cycles rejected by the period check.
+    """
+
+    per_cycle: np.ndarray
+    mean: np.ndarray
+    spread: np.ndarray
+    standard_error: np.ndarray
+    flapping_frequency_hz: float
+    rejected_cycles: int
+
+    @property
+    def cycle_count(self) -> int:
+        """Number of accepted cycles."""
+        return len(self.per_cycle)
+
+    @property
+    def two_sigma(self) -> np.ndarray:
+        """Twice the spread over cycles (the study's error bar)."""
+        return 2.0 * self.spread
+
+    def as_record(self) -> dict[str, float]:
+        """Flat dictionary: ``<load>``, ``<load>_2sigma``, ``<load>_se``, cycle count and frequency."""
+        record: dict[str, float] = {"cycles": self.cycle_count, "f_hall_hz": self.flapping_frequency_hz,
+                                    "rejected_cycles": self.rejected_cycles}
+        for index, name in enumerate(BODY_LOAD_NAMES):
+            record[name] = float(self.mean[index])
+            record[f"{name}_2sigma"] = float(self.two_sigma[index])
+            record[f"{name}_se"] = float(self.standard_error[index])
+        return record
+
+
+def cycle_averaged_loads(
+    gauge_volts: np.ndarray,
+    hall_v: np.ndarray,
+    sample_rate_hz: float,
+    tare_volts: np.ndarray,
+    calibration: AtiCalibration,
+    hall_settings: HallEdgeSettings | None = None,
+) -> CycleAveragedLoads:
+    """Tare-corrected, cycle-averaged body-frame loads of one record.
+
+    Parameters
+    ----------
+    gauge_volts : numpy.ndarray
+        Raw gauge voltages, shape (n_samples, 6), V.
+    hall_v : numpy.ndarray
+        Hall line, shape (n_samples,), V.
+    sample_rate_hz : float
+        Sampling rate, Hz.
+    tare_volts : numpy.ndarray
+        Mean gauge voltages of the wind-off, motor-off tare at the same pitch and tail state, shape (6,), V.
+    calibration : AtiCalibration
+        Balance calibration whose tool transform gives the body frame at the vehicle reference point.
+    hall_settings : HallEdgeSettings, optional
+        Hall edge detection settings.
+    """
+    cycles = flap_cycles(hall_v, sample_rate_hz, hall_settings)
+    volts_per_cycle = cycle_means(np.asarray(gauge_volts, dtype=float), cycles, sample_rate_hz)
+    per_cycle = calibration.forces_from_voltages(volts_per_cycle, np.asarray(tare_volts, dtype=float))
+    spread = per_cycle.std(axis=0, ddof=1)
+    return CycleAveragedLoads(
+        per_cycle=per_cycle,
+        mean=per_cycle.mean(axis=0),
+        spread=spread,
+        standard_error=spread / np.sqrt(len(per_cycle)),
+        flapping_frequency_hz=float(cycles.frequency_hz.mean()),
+        rejected_cycles=cycles.rejected_count,
+    )

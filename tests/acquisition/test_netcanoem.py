@@ -1,0 +1,210 @@
+"""NETCANOEM: identifiers and payloads, the CAN rate ceiling, the driver on a virtual bus."""
+
+import struct
+import time
+
+import numpy as np
+import pytest
+
+from ornitail.acquisition import netcanoem_protocol as protocol
+from ornitail.acquisition.instrument_errors import InstrumentDisconnected
+from ornitail.acquisition.netcanoem_driver import NetCanOemDriver
+from ornitail.acquisition.pytest_plugin import PACKAGED_CALIBRATION
+from ornitail.acquisition.simulated_netcanoem_board import GAUGE_VOLTS_PER_COUNT
+from ornitail.calibration.ati_calibration import AtiCalibration
+from ornitail.core.errors import UserInputError
+
+
+@pytest.mark.parametrize(
+    ("base_id", "opcode", "identifier"),
+    [
+        (0x20, 0x0, 0x200),
+        (0x20, 0x1, 0x201),
+        (0x20, 0xF, 0x20F),
+        (0x7F, 0xE, 0x7FE),
+        (0x00, 0x5, 0x005),
+    ],
+)
+def test_identifier_is_base_shifted_by_four_or_opcode(base_id, opcode, identifier):
+    assert protocol.arbitration_id(base_id, opcode) == identifier
+    assert protocol.split_arbitration_id(identifier) == (base_id, opcode)
+
+
+def test_identifier_refuses_out_of_range_fields():
+    with pytest.raises(ValueError):
+        protocol.arbitration_id(0x80, 0)
+    with pytest.raises(ValueError):
+        protocol.arbitration_id(0x20, 0x10)
+
+
+def test_gauge_replies_split_status_and_even_gauges_then_odd_gauges_big_endian():
+    first, second = protocol.encode_gauge_replies(0x8001, np.array([1, -2, 300, -32768, 32767, 0]))
+    assert first == bytes.fromhex("80010001012c7fff")  # status, g0, g2, g4
+    assert second == bytes.fromhex("fffe80000000")  # g1, g3, g5
+    status, gauges = protocol.decode_gauge_replies(first, second)
+    assert status == 0x8001
+    assert gauges.tolist() == [1, -2, 300, -32768, 32767, 0]
+    assert protocol.saturated_gauges(gauges).tolist() == [False, False, False, True, True, False]
+
+
+def test_matrix_row_is_six_big_endian_float32_over_three_frames():
+    row = np.array([1.5, -2.0, 0.25, 100.0, -0.125, 3.0])
+    replies = protocol.encode_matrix_row_replies(row)
+    assert replies[0] == struct.pack(">ff", 1.5, -2.0) == bytes.fromhex("3fc00000c0000000")
+    assert [len(r) for r in replies] == [8, 8, 8]
+    np.testing.assert_array_equal(protocol.decode_matrix_row(replies), row)
+
+
+def test_other_payloads():
+    assert protocol.encode_counts_per_unit(1_000_000, 1000) == bytes.fromhex("000f4240000003e8")
+    assert protocol.decode_counts_per_unit(bytes.fromhex("000f4240000003e8")) == (1_000_000, 1000)
+    assert protocol.encode_firmware_version(2, 1, 7) == bytes.fromhex("02010007")
+    assert protocol.decode_firmware_version(bytes.fromhex("02010007")) == "2.1.7"
+    assert protocol.encode_serial_number("FT8884") == b"FT8884\0\0"
+    assert protocol.decode_serial_number(b"FT8884\0\0") == "FT8884"
+
+
+@pytest.mark.parametrize(
+    ("divisor", "bit_rate"), [(0, 2_000_000), (1, 1_000_000), (3, 500_000), (7, 250_000)]
+)
+def test_bit_rate_divisor(divisor, bit_rate):
+    assert protocol.bit_rate_for_divisor(divisor) == bit_rate
+    assert protocol.divisor_for_bit_rate(bit_rate) == divisor
+
+
+def test_rate_ceiling_numbers_computed_by_hand():
+    # request DLC 0: 44 + 0 + 3 + floor(33/4)=8 -> 55 bits;
+    # reply DLC 8: 44 + 64 + 3 + floor(97/4)=24
+    # -> 135; reply DLC 6: 44 + 48 + 3 + floor(81/4)=20 -> 115. Total 305 bits per sample.
+    assert [protocol.classic_can_frame_bits(d) for d in (0, 8, 6)] == [55, 135, 115]
+    assert protocol.gauge_sample_bits() == 305
+    assert protocol.gauge_sample_rate_ceiling_hz(1_000_000) == pytest.approx(1e6 / 305)  # 3279/s
+    # Without stuffing: 47 + 111 + 95 = 253 bits -> 3953/s, ATI's "about 3.9 k samples/s".
+    assert protocol.gauge_sample_bits(worst_case_stuffing=False) == 253
+    assert protocol.gauge_sample_rate_ceiling_hz(1e6, worst_case_stuffing=False) == pytest.approx(
+        3952.57, abs=0.01
+    )
+    assert protocol.gauge_sample_rate_ceiling_hz(250_000) == pytest.approx(250_000 / 305)
+
+
+@pytest.fixture
+def can_driver(simulated_netcanoem):
+    driver = NetCanOemDriver(
+        interface="virtual", channel=simulated_netcanoem.channel, name="test NETCANOEM"
+    )
+    driver.open()
+    yield driver
+    driver.close()
+
+
+def test_polling_faster_than_the_bus_allows_is_refused_with_the_ceiling(can_driver):
+    with pytest.raises(
+        UserInputError, match=r"ceiling of 3279 samples/s .* 3953/s without stuffing"
+    ):
+        can_driver.start_polling(3500.0)
+    with pytest.raises(UserInputError):
+        can_driver.start_polling(10_000.0)
+
+
+def test_queries_read_the_board_calibration(can_driver):
+    calibration = AtiCalibration.from_file(PACKAGED_CALIBRATION)
+    assert can_driver.read_serial_number() == "FT8884"
+    assert can_driver.read_firmware_version() == "2.1.7"
+    assert can_driver.read_counts_per_unit() == (1_000_000, 1_000_000)
+    assert can_driver.read_unit_codes() == (2, 3)
+    can_driver.set_active_calibration(1)
+    matrix = can_driver.read_matrix()
+    # board matrix = matrix_si * volts per count * counts per unit, stored as float32 (rel. 6e-8)
+    np.testing.assert_allclose(
+        matrix, calibration.matrix_si * GAUGE_VOLTS_PER_COUNT * 1e6, rtol=1e-7
+    )
+
+
+def test_board_wrench_equals_the_calibration_applied_to_the_digitised_voltages(can_driver):
+    calibration = AtiCalibration.from_file(PACKAGED_CALIBRATION)
+    matrix = can_driver.read_matrix()
+    reading = can_driver.read_gauges()
+    wrench = can_driver.wrench_from_gauges(
+        reading.gauges[None, :], matrix, (1_000_000, 1_000_000), (2, 3)
+    )
+    expected = calibration.matrix_si @ (reading.gauges * GAUGE_VOLTS_PER_COUNT)
+    # float32 matrix coefficients: relative error ~1e-7 of each term; terms are below 1e3 N
+    np.testing.assert_allclose(wrench[0], expected, rtol=0, atol=1e-4)
+    assert reading.status_word == 0 and not reading.saturated.any()
+
+
+def test_polling_delivers_blocks_flags_saturation_and_counts_error_frames(
+    simulated_netcanoem, can_driver
+):
+    can_driver.start_polling(500.0)
+    first = can_driver.get_block(timeout_s=2.0)
+    assert first is not None and first.gauges.shape[1] == 6
+    simulated_netcanoem.force_gauge(3, protocol.GAUGE_SATURATION_LOW)
+    simulated_netcanoem.inject_error_frames(4)
+    simulated_netcanoem.set_status_word(0x0040)
+    deadline = time.monotonic() + 3.0
+    while time.monotonic() < deadline:
+        block = can_driver.get_block(timeout_s=1.0)
+        if block is not None and block.saturated[:, 3].any():
+            break
+    can_driver.stop_polling()
+    last = np.flatnonzero(block.saturated[:, 3])[-1]
+    assert block.gauges[last, 3] == -32768
+    assert block.saturated[last].tolist() == [False, False, False, True, False, False]
+    assert block.status_words[last] == 0x0040
+    assert can_driver.error_frames == 4
+    assert can_driver.missed_replies == 0
+
+
+def test_board_that_stops_answering_raises_disconnected(simulated_netcanoem, can_driver):
+    can_driver.start_polling(200.0)
+    assert can_driver.get_block(timeout_s=2.0) is not None
+    simulated_netcanoem.unplug()
+    with pytest.raises(
+        InstrumentDisconnected, match="test NETCANOEM: 3 gauge requests in a row got no reply"
+    ):
+        for _ in range(50):
+            can_driver.get_block(timeout_s=1.0)
+    with pytest.raises(InstrumentDisconnected):
+        can_driver.stop_polling()
+
+
+def test_single_query_to_a_silent_bus_names_the_instrument():
+    driver = NetCanOemDriver(
+        interface="virtual",
+        channel="ornitail-nobody-here",
+        name="balance CAN",
+        reply_timeout_s=0.05,
+    )
+    with pytest.raises(
+        InstrumentDisconnected, match=r"balance CAN: no reply to opcode 0x5 within 0.05 s"
+    ):
+        driver.open()
+    driver.close()
+
+
+def test_bus_that_cannot_be_opened_names_the_instrument():
+    driver = NetCanOemDriver(
+        interface="socketcan", channel="ornitail_no_such_can", name="balance CAN"
+    )
+    with pytest.raises(
+        InstrumentDisconnected, match="balance CAN: cannot open CAN interface 'socketcan'"
+    ):
+        driver.open()
+
+
+def test_bus_error_while_polling_raises_disconnected(simulated_netcanoem):
+    # A bus whose send fails the way a bus-off controller does: python-can's virtual bus raises
+    # CanOperationError once shut down. The driver must turn it into InstrumentDisconnected.
+    driver = NetCanOemDriver(
+        interface="virtual", channel=simulated_netcanoem.channel, name="CAN balance"
+    )
+    driver.open()
+    driver.start_polling(200.0)
+    assert driver.get_block(timeout_s=2.0) is not None
+    driver._bus.shutdown()
+    with pytest.raises(InstrumentDisconnected, match="CAN balance: CAN bus error"):
+        for _ in range(50):
+            driver.get_block(timeout_s=1.0)
+    driver._bus = None
+    driver.close()
