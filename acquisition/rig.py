@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from ornitail.acquisition.flapping_motor_driver import FlappingMotorDriver
@@ -231,6 +232,47 @@ class Rig:
     def read_flapping_frequency_hz(self) -> float:
         """Flapping frequency from the measured motor speed, Hz."""
         return self._connected(self.motor).read_rpm() / 60.0 / self.description.gear_ratio
+
+    def set_point_limits(self) -> dict[str, tuple[float, float]]:
+        """The rig's set-point limits in SI units, keyed by set-point field (for plan checks)."""
+        limits = self.description.limits
+        return {
+            "pitch_rad": (limits.pitch_min_rad, limits.pitch_max_rad),
+            "tunnel_velocity_m_s": (limits.velocity_min_m_s, limits.velocity_max_m_s),
+            "flapping_frequency_hz": (
+                limits.flapping_frequency_min_hz,
+                limits.flapping_frequency_max_hz,
+            ),
+        }
+
+    def now_s(self) -> float:
+        """Rig time, s: the simulated clock of a simulated rig, else the monotonic wall clock."""
+        if self.simulators is not None:
+            return self.simulators.clock.now_s()
+        return time.monotonic()
+
+    def mount_vehicle(self, tail_id: str, x_h_m: float) -> None:
+        """Tell a simulated rig which vehicle is on the balance (a real rig has the real one)."""
+        if self.simulators is None:
+            return
+        from ornitail.sim.configuration import study_configuration
+
+        self.simulators.signals.mount_vehicle(study_configuration(tail_id, x_h_m * 1000.0))
+
+    def change_tail(self, tail_attached: bool, operator_prompt: Callable[[str], None]) -> None:
+        """Fit or remove the tail with motor and tunnel in a safe state.
+
+        On a simulated rig the simulated vehicle changes; on a real rig ``operator_prompt`` is called with the
+        instruction and must return once the operator has done it.
+        """
+        errors = self.safe_state()
+        if errors:
+            raise errors[0]
+        if self.simulators is not None:
+            self.simulators.signals.set_operating_point(tail_attached=tail_attached)
+            return
+        action = "Fit the tail" if tail_attached else "Remove the tail (keep the base tail mount)"
+        operator_prompt(f"{action}; motor and tunnel are off.")
 
     def wait_simulated_s(self, simulated_seconds: float) -> None:
         """Sleep ``simulated_seconds`` of rig time (wall time / time scale on a simulated rig)."""

@@ -16,6 +16,7 @@ from typing import Any
 from ornitail.acquisition.daq_protocol import DEFAULT_BAUD, link_ceiling_frames_per_s
 from ornitail.acquisition.line_instrument_connection import DEFAULT_LINE_BAUD
 from ornitail.acquisition.netcanoem_protocol import DEFAULT_BASE_ID, gauge_sample_rate_ceiling_hz
+from ornitail.calibration.tool_transform import ToolTransform
 from ornitail.core.errors import UserInputError
 
 DEFAULT_RIG_FILE = Path(__file__).parent / "data" / "simulated_rig.toml"
@@ -23,7 +24,7 @@ BALANCE_ROUTES = ("serial_daq", "can")
 
 _ALLOWED_KEYS = {
     "rig": {"name", "simulated", "time_scale", "seed"},
-    "balance": {"route", "calibration", "serial_daq", "can"},
+    "balance": {"route", "calibration", "tool_transform_mm_deg", "serial_daq", "can"},
     "balance.serial_daq": {"port", "baud", "sample_rate_hz"},
     "balance.can": {"interface", "channel", "bit_rate", "base_id", "sample_rate_hz"},
     "tunnel": {"table"},
@@ -87,6 +88,7 @@ class RigDescription:
     seed: int
     balance_route: str
     calibration_path: Path
+    tool_transform: ToolTransform
     serial_daq: SerialDaqSettings
     can: CanSettings
     tunnel_table_path: Path
@@ -185,6 +187,22 @@ class _Fields:
             raise UserInputError(self.where(key), f"minimum {low:g} must be below maximum {high:g}")
         return low, high
 
+    def tool_transform(self, key: str) -> ToolTransform:
+        value = self.get(key, [0.0] * 6)
+        if (
+            not isinstance(value, list)
+            or len(value) != 6
+            or any(
+                isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v)
+                for v in value
+            )
+        ):
+            raise UserInputError(
+                self.where(key),
+                f"{value!r} must be six finite numbers [dx, dy, dz (mm), rx, ry, rz (deg)]",
+            )
+        return ToolTransform.from_mm_deg(*(float(v) for v in value))
+
     def file(self, key: str) -> Path:
         relative = self.text(key)
         resolved = (self.path.parent / relative).resolve()
@@ -282,6 +300,7 @@ def read_rig_file(path: str | Path) -> RigDescription:
         seed=rig.integer("seed", 0),
         balance_route=route,
         calibration_path=balance.file("calibration"),
+        tool_transform=balance.tool_transform("tool_transform_mm_deg"),
         serial_daq=serial_daq,
         can=can_settings,
         tunnel_table_path=tunnel.file("table"),

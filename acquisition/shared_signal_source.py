@@ -49,6 +49,11 @@ class SharedTunnelSignals:
         )
         return cls(source, sample_rate_hz)
 
+    def mount_vehicle(self, configuration: Any) -> None:
+        """Put another simulated vehicle (an ``ornitail.sim`` configuration) on the balance."""
+        with self._lock:
+            self._source.mount_vehicle(configuration)
+
     def set_operating_point(self, **operating_point: Any) -> None:
         """Forward to the source's ``set_operating_point`` (pitch_rad, tunnel_velocity_m_s, ...)."""
         with self._lock:

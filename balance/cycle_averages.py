@@ -81,17 +81,23 @@ def phase_average(
     bounds = _cycle_sample_bounds(cycles, sample_rate_hz, len(data))
     lengths = bounds[:, 1] - bounds[:, 0]
     if n_bins < 1 or n_bins > int(lengths.min()):
-        raise ValueError(f"n_bins={n_bins} must be between 1 and the shortest cycle ({lengths.min()} samples)")
+        raise ValueError(
+            f"n_bins={n_bins} must be between 1 and the shortest cycle ({lengths.min()} samples)"
+        )
     n_cycles = len(bounds)
     cycle_of_sample = np.repeat(np.arange(n_cycles), lengths)
     sample_index = np.concatenate([np.arange(a, b) for a, b in bounds])
-    phase = (sample_index / sample_rate_hz - cycles.start_s[cycle_of_sample]) / cycles.period_s[cycle_of_sample]
+    phase = (sample_index / sample_rate_hz - cycles.start_s[cycle_of_sample]) / cycles.period_s[
+        cycle_of_sample
+    ]
     bin_of_sample = np.clip((phase * n_bins).astype(np.int64), 0, n_bins - 1)
     flat_bin = cycle_of_sample * n_bins + bin_of_sample
     counts = np.bincount(flat_bin, minlength=n_cycles * n_bins).reshape(n_cycles, n_bins)
     per_cycle = np.empty((n_cycles, n_bins, data.shape[1]))
     for channel in range(data.shape[1]):
-        sums = np.bincount(flat_bin, weights=data[sample_index, channel], minlength=n_cycles * n_bins)
+        sums = np.bincount(
+            flat_bin, weights=data[sample_index, channel], minlength=n_cycles * n_bins
+        )
         per_cycle[:, :, channel] = sums.reshape(n_cycles, n_bins) / counts
     spread = per_cycle.std(axis=0, ddof=1) if n_cycles > 1 else np.zeros(per_cycle.shape[1:])
     return PhaseAverage(

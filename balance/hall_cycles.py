@@ -75,7 +75,9 @@ class FlapCycles:
         return len(self.start_s)
 
 
-def rising_edge_times(hall_v: np.ndarray, sample_rate_hz: float, settings: HallEdgeSettings) -> np.ndarray:
+def rising_edge_times(
+    hall_v: np.ndarray, sample_rate_hz: float, settings: HallEdgeSettings
+) -> np.ndarray:
     """Times of the rising edges of the Hall line, seconds from the first sample.
 
     Parameters

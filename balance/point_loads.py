@@ -56,8 +56,11 @@ class CycleAveragedLoads:
 
     def as_record(self) -> dict[str, float]:
         """Flat dictionary: ``<load>``, ``<load>_2sigma``, ``<load>_se``, cycle count and frequency."""
-        record: dict[str, float] = {"cycles": self.cycle_count, "f_hall_hz": self.flapping_frequency_hz,
-                                    "rejected_cycles": self.rejected_cycles}
+        record: dict[str, float] = {
+            "cycles": self.cycle_count,
+            "f_hall_hz": self.flapping_frequency_hz,
+            "rejected_cycles": self.rejected_cycles,
+        }
         for index, name in enumerate(BODY_LOAD_NAMES):
             record[name] = float(self.mean[index])
             record[f"{name}_2sigma"] = float(self.two_sigma[index])
@@ -92,7 +95,9 @@ def cycle_averaged_loads(
     """
     cycles = flap_cycles(hall_v, sample_rate_hz, hall_settings)
     volts_per_cycle = cycle_means(np.asarray(gauge_volts, dtype=float), cycles, sample_rate_hz)
-    per_cycle = calibration.forces_from_voltages(volts_per_cycle, np.asarray(tare_volts, dtype=float))
+    per_cycle = calibration.forces_from_voltages(
+        volts_per_cycle, np.asarray(tare_volts, dtype=float)
+    )
     spread = per_cycle.std(axis=0, ddof=1)
     return CycleAveragedLoads(
         per_cycle=per_cycle,

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
 from ornitail.core.errors import UserInputError
 
 AXIS_NAMES = ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
 from ornitail.calibration.ati_cal_file import AXIS_NAMES, AtiCalFileContents, read_ati_cal_file
 from ornitail.calibration.ati_units import (
     metres_per_distance_unit,

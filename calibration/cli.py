@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
+
 from ornitail.calibration.ati_cal_file import AXIS_NAMES
 from ornitail.calibration.ati_calibration import (
     WRENCH_COMPONENT_NAMES,

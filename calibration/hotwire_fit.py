@@ -15,6 +15,8 @@ import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import least_squares
+
 from ornitail.calibration.hotwire_laws import (
     HotwireFitProvenance,
     HotwireLaw,
@@ -26,7 +28,6 @@ from ornitail.calibration.hotwire_points import (
     temperature_corrected_voltage,
 )
 from ornitail.core.errors import UserInputError
-from scipy.optimize import least_squares
 
 DEFAULT_POLYNOMIAL_ORDER = 4
 KING_EXPONENT_FIRST_GUESS = 0.5

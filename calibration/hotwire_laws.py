@@ -37,6 +37,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
 from ornitail.calibration.hotwire_points import temperature_corrected_voltage
 from ornitail.core.errors import UserInputError
 from ornitail.core.hashing import content_hash_of_bytes

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
 from ornitail.calibration.numeric_csv import read_numeric_csv_columns
 from ornitail.calibration.thermocouple_amplifier import CELSIUS_TO_KELVIN_OFFSET
 from ornitail.core.errors import UserInputError

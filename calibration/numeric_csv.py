@@ -14,6 +14,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+
 from ornitail.core.errors import UserInputError
 
 

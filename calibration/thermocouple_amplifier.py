@@ -15,6 +15,7 @@ true curve (a few tenths of a degree near room temperature) is not corrected.
 from __future__ import annotations
 
 import numpy as np
+
 from ornitail.core.errors import require_finite
 
 AD8495_OFFSET_V = 1.25

@@ -24,6 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+
 from ornitail.calibration.number_lists import parse_comma_separated_numbers
 from ornitail.core.errors import require_finite
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
 from ornitail.calibration.numeric_csv import read_numeric_csv_columns
 from ornitail.core.errors import UserInputError, require_finite
 from ornitail.core.hashing import content_hash_of_bytes

@@ -25,7 +25,9 @@ def _to_jsonable(value: Any) -> Any:
     return value
 
 
-def emit(result: dict[str, Any], as_json: bool, render_text: Callable[[dict[str, Any]], str]) -> None:
+def emit(
+    result: dict[str, Any], as_json: bool, render_text: Callable[[dict[str, Any]], str]
+) -> None:
     """Print ``result`` as exactly one JSON object (``as_json``) or as the text ``render_text`` makes."""
     if as_json:
         click.echo(json.dumps(_to_jsonable(result)))

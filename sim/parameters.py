@@ -38,6 +38,7 @@ class VehicleParameters:
     # --- flapping wings (cycle-averaged) -------------------------------------------------------
     thrust_coefficient_n_per_hz2: float = 1.15e-3  # calibrated: T = k f^2 (hover 0.21 N at 13.5 Hz)
     thrust_inflow_coefficient: float = 7.0e-4  # calibrated: dT = k_w f w_wing, N/(Hz m/s)
+    thrust_crossflow_coefficient: float = 0.0  # calibrated: translational lift dT = k_u f u_wing^2
     counter_force_coefficient: float = 6.0e-3  # calibrated: X = -c f u_wing, N s/(m Hz)
     counter_force_inflow_sensitivity: float = 4.0  # calibrated: gives the study's X_w, M_w orders
     wing_pressure_centre_station_m: float = 0.016  # calibrated: where X and T act

@@ -24,8 +24,8 @@ from ornitail.sim.configuration import VehicleConfiguration, default_configurati
 from ornitail.sim.effects import EffectSet
 from ornitail.sim.instruments import (
     BalanceGauges,
-    balance_calibration_matrix_si,
     TunnelConditions,
+    balance_calibration_matrix_si,
     hall_voltage,
     hotwire_bridge_voltage,
     thermocouple_voltage,
@@ -191,6 +191,15 @@ class TunnelSignalSource:
         self.tunnel_velocity_m_s = 0.0
         self.flapping_frequency_hz = 0.0
         self.tail_attached = True
+        self._truth = self._compute_truth()
+
+    def mount_vehicle(self, configuration: VehicleConfiguration) -> None:
+        """Put another vehicle on the same balance (same sensor, bias and clock; the tail state is kept)."""
+        self.configuration = configuration
+        self._vehicles = {
+            True: PreparedVehicle(configuration, self.effects, "tunnel"),
+            False: PreparedVehicle(configuration.without_tail(), self.effects, "tunnel"),
+        }
         self._truth = self._compute_truth()
 
     def set_operating_point(

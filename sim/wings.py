@@ -68,6 +68,7 @@ def cycle_averaged_wing_loads(
     thrust = (
         parameters.thrust_coefficient_n_per_hz2 * scaling.thrust_scale * f * f
         + parameters.thrust_inflow_coefficient * f * w_m_s
+        + parameters.thrust_crossflow_coefficient * f * u_wing * u_wing
     )
     tip_speed = (
         2.0 * np.pi * max(f, 1.0) * parameters.flap_amplitude_rad * parameters.wing_semi_span_m

@@ -38,7 +38,9 @@ def test_edge_times_are_recovered_to_a_fraction_of_a_sample(frequency_hz):
 def test_glitch_inside_lockout_is_ignored_and_glitch_outside_it_splits_a_rejected_cycle():
     true_edges = np.arange(0.01, 1.99, 1 / 13.0)
     glitch_inside = true_edges[3] + 0.010  # 10 ms after an edge, inside the 20 ms lock-out
-    glitch_outside = true_edges[8] + 0.040  # 40 ms after an edge: splits one 77 ms cycle into 40 + 37 ms
+    glitch_outside = (
+        true_edges[8] + 0.040
+    )  # 40 ms after an edge: splits one 77 ms cycle into 40 + 37 ms
     line = hall_line(np.sort(np.r_[true_edges, glitch_inside, glitch_outside]), 2.0, width_s=1e-3)
     cycles = flap_cycles(line, SAMPLE_RATE_HZ)
     assert len(cycles.edge_times_s) == len(true_edges) + 1
@@ -53,7 +55,9 @@ def test_missing_pulse_rejects_the_double_cycle():
     line = hall_line(np.delete(true_edges, 10), 2.0)
     cycles = flap_cycles(line, SAMPLE_RATE_HZ)
     assert cycles.rejected_count == 1
-    assert len(cycles) == len(true_edges) - 3  # n edges - 1 pulse = n-1 edges -> n-2 cycles, one rejected
+    assert (
+        len(cycles) == len(true_edges) - 3
+    )  # n edges - 1 pulse = n-1 edges -> n-2 cycles, one rejected
     assert np.all(np.abs(cycles.period_s - 1 / 13.0) < 1e-6)
 
 
@@ -81,14 +85,18 @@ def test_nan_in_hall_line_is_refused():
 
 
 def test_cycle_means_and_phase_average_of_a_known_periodic_signal():
-    frequency_hz = 12.5  # 800 samples per cycle exactly, so whole-cycle means of harmonics vanish exactly
+    frequency_hz = (
+        12.5  # 800 samples per cycle exactly, so whole-cycle means of harmonics vanish exactly
+    )
     rise_s = 2e-4
     # Place each mid-level crossing half a sample after a sample instant: the cycle then holds samples at phases
     # (0.5 .. 799.5) / 800, and the 20 samples of each of 40 bins are centred on the bin centre.
     crossing_s = (np.arange(25) * 800 + 0.5) / SAMPLE_RATE_HZ
     line = hall_line(crossing_s - rise_s * 1.5 / 3.3, 2.0, rise_s=rise_s)
     phase = 2 * np.pi * frequency_hz * (np.arange(line.size) / SAMPLE_RATE_HZ - crossing_s[0])
-    force = np.column_stack([0.25 + 0.1 * np.sin(phase) + 0.05 * np.cos(3 * phase), -0.5 + 0 * phase])
+    force = np.column_stack(
+        [0.25 + 0.1 * np.sin(phase) + 0.05 * np.cos(3 * phase), -0.5 + 0 * phase]
+    )
     cycles = flap_cycles(line, SAMPLE_RATE_HZ)
     means = cycle_means(force, cycles, SAMPLE_RATE_HZ)
     np.testing.assert_allclose(means, [[0.25, -0.5]] * len(cycles), atol=1e-12)

@@ -6,6 +6,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+
 from ornitail.calibration.ati_cal_file import read_ati_cal_file
 from ornitail.calibration.ati_calibration import (
     AtiCalibration,

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.calibration.data_files import (
     EXAMPLE_HOTWIRE_POINTS_PATH,

@@ -6,6 +6,8 @@ import json
 
 import numpy as np
 import pytest
+from scipy import stats
+
 from ornitail.calibration.data_files import EXAMPLE_HOTWIRE_POINTS_PATH
 from ornitail.calibration.hotwire_fit import fit_kings_law, fit_polynomial_law
 from ornitail.calibration.hotwire_laws import (
@@ -21,7 +23,6 @@ from ornitail.calibration.hotwire_points import (
 )
 from ornitail.core.errors import UserInputError
 from ornitail.core.hashing import content_hash_of_file
-from scipy import stats
 
 TRUE_A_V2, TRUE_B, TRUE_N = 1.60, 0.95, 0.45
 WIRE_K, REFERENCE_K = 523.15, 293.15

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.calibration.tool_transform import ToolTransform
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from ornitail.calibration.data_files import EXAMPLE_TUNNEL_TABLE_PATH
 from ornitail.calibration.flapping_frequency_check import (
     FLAPPING_GEAR_RATIO,

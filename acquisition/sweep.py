@@ -1,0 +1,474 @@
+"""Run a sweep plan on a rig: move, settle, record, journal; resumable; always ending in a safe state.
+
+One sweep records one run per tail state (the tailed run, then the tailless run), each a recording directory
+with its own journal and stop record. The runs of one sweep form a chain through ``resumed_from_run_id``, and
+``resume=True`` continues the newest chain of the same plan at its first unfinished set point, in a new run.
+
+The balance streams without pause for the whole of a run, moves and settling included, so the sample counter
+never jumps; every set point is a range of rows in that stream. Stopping:
+
+- :meth:`SweepStop.request` (the first Ctrl-C) finishes the current set point and then ends the run as
+  ``aborted``;
+- a ``KeyboardInterrupt`` (the second Ctrl-C) ends it at once, also as ``aborted``;
+- an instrument error (unplugged, no reply) ends it as ``failed`` with the instrument named.
+
+Whatever happens, motor and fan are brought to a safe state and every completed set point stays on disk.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from itertools import groupby
+from pathlib import Path
+
+from ornitail.acquisition.catalog import RunCatalog, RunFilter
+from ornitail.acquisition.daq_protocol import CHANNEL_NAMES
+from ornitail.acquisition.instrument_errors import InstrumentError
+from ornitail.acquisition.recorder import Recorder, RunAborted
+from ornitail.acquisition.recording_layout import (
+    ChannelSpec,
+    RunConfiguration,
+    SetPointRecord,
+    StreamLayout,
+)
+from ornitail.acquisition.rig import Rig
+from ornitail.acquisition.run_files import read_journal
+from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
+from ornitail.acquisition.sweep_plan import SetPoint, SettleCriteria, SweepPlan, limit_violations
+from ornitail.core.errors import UserInputError
+
+RECORD_START_DELAY_S = 0.1
+"""Rig time between settling and the first recorded row: covers the driver's ~10 ms block latency."""
+POLL_INTERVAL_S = 0.1
+"""Rig time between readings while settling."""
+
+
+class SweepStop:
+    """A thread-safe request to stop after the current set point (what the first Ctrl-C sets)."""
+
+    def __init__(self) -> None:
+        self._event = threading.Event()
+
+    def request(self) -> None:
+        """Ask the sweep to stop once the current set point is recorded."""
+        self._event.set()
+
+    @property
+    def requested(self) -> bool:
+        """True once :meth:`request` was called."""
+        return self._event.is_set()
+
+
+class SettleTimeout(InstrumentError):
+    """A set point was not reached within the plan's settle timeout."""
+
+
+@dataclass(frozen=True)
+class SweepEvent:
+    """Progress of a sweep, passed to the ``on_event`` callback.
+
+    Attributes
+    ----------
+    stage : str
+        ``"moving"``, ``"settled"``, ``"recorded"`` or ``"tail_change"``.
+    set_point : SetPoint or None
+        The point concerned.
+    completed, total : int
+        Set points done (including those of earlier runs of a resumed sweep) and in the plan.
+    eta_s : float
+        Estimated rig time left, seconds.
+    """
+
+    stage: str
+    set_point: SetPoint | None
+    completed: int
+    total: int
+    eta_s: float
+
+
+@dataclass
+class SweepResult:
+    """What a sweep did.
+
+    Attributes
+    ----------
+    status : str
+        ``"completed"``, ``"aborted"`` or ``"failed"`` (the last with ``message`` naming the cause).
+    run_directories : list of pathlib.Path
+        Every run of the sweep's chain, oldest first (earlier runs of a resumed sweep included).
+    completed_points, total_points : int
+        Set points recorded so far in the chain, and in the plan.
+    message : str
+        One line for the operator.
+    """
+
+    status: str
+    run_directories: list[Path] = field(default_factory=list)
+    completed_points: int = 0
+    total_points: int = 0
+    message: str = ""
+
+
+def check_plan_against_rig(plan: SweepPlan, rig: Rig) -> None:
+    """Raise :class:`UserInputError` listing every set point outside the rig's limits."""
+    violations = limit_violations(plan, rig.set_point_limits())
+    if violations:
+        raise UserInputError(
+            plan.source,
+            f"{len(violations)} set point(s) outside the rig's limits ({rig.description.path}): "
+            + "; ".join(violations),
+        )
+    if rig.description.balance_route != "serial_daq":
+        raise UserInputError(
+            f"{rig.description.path}: [balance].route",
+            "sweeps record the Hall line and the hot-wire with the balance, which only the serial DAQ "
+            'route carries; use route = "serial_daq"',
+        )
+
+
+def previous_sweep_chain(catalog: RunCatalog, plan: SweepPlan) -> list[Path]:
+    """Run directories of the newest sweep of ``plan`` (same plan name, tail and x_h), oldest first."""
+    runs = [
+        run
+        for run in catalog.find_runs(RunFilter(tail_id=plan.tail_id, x_h_m=plan.x_h_m))
+        if run.plan_name == plan.name
+    ]
+    if not runs:
+        return []
+    by_id = {run.run_id: run for run in runs}
+    newest = max(runs, key=lambda run: run.start_time_utc)
+    chain = [newest]
+    while chain[-1].resumed_from_run_id in by_id:
+        chain.append(by_id[chain[-1].resumed_from_run_id])
+    return [catalog.data_root / run.run_directory for run in reversed(chain)]
+
+
+def completed_plan_points(run_directories: Iterable[Path]) -> set[int]:
+    """Plan indices of the set points journalled as completed in these runs."""
+    return {
+        record.plan_point_index
+        for directory in run_directories
+        for record in read_journal(Path(directory))
+    }
+
+
+class _BalancePump(threading.Thread):
+    """Moves blocks from the balance driver to the recorder and reports link health as increments."""
+
+    def __init__(self, driver: SerialDaqDriver, recorder: Recorder) -> None:
+        super().__init__(name="balance-pump", daemon=True)
+        self.driver, self.recorder = driver, recorder
+        self.error: BaseException | None = None
+        self._stop_event = threading.Event()
+        self._reported_crc_errors = 0
+        self._reported_lost_samples = 0
+
+    def run(self) -> None:
+        try:
+            while not self._stop_event.is_set():
+                block = self.driver.get_block(timeout_s=0.1)
+                if block is None:
+                    self.driver.raise_if_failed()
+                    continue
+                self.recorder.put_block(block.counters, block.volts)
+                self._report_link_health()
+        except BaseException as error:  # handed to the sweep thread, which raises it
+            self.error = error
+
+    def _report_link_health(self) -> None:
+        statistics = self.driver.statistics
+        crc_errors, lost = statistics.crc_failures, statistics.lost_samples
+        if crc_errors != self._reported_crc_errors or lost != self._reported_lost_samples:
+            self.recorder.report_link_health(
+                crc_errors=crc_errors - self._reported_crc_errors,
+                lost_samples=lost - self._reported_lost_samples,
+            )
+            self._reported_crc_errors, self._reported_lost_samples = crc_errors, lost
+
+    def raise_if_failed(self) -> None:
+        if self.error is not None:
+            raise self.error
+
+    def stop(self) -> None:
+        self._stop_event.set()
+        self.join(timeout=2.0)
+
+
+@dataclass
+class _SweepContext:
+    plan: SweepPlan
+    rig: Rig
+    stop: SweepStop
+    on_event: Callable[[SweepEvent], None]
+    completed: int
+    durations_s: list[float] = field(default_factory=list)
+
+    def eta_s(self) -> float:
+        remaining = (
+            self.plan.set_points[self.completed :] if self.completed else self.plan.set_points
+        )
+        typical_s = (
+            sum(self.durations_s) / len(self.durations_s)
+            if self.durations_s
+            else self.plan.record_s + self.plan.settle.stable_for_s + 5.0
+        )
+        return typical_s * len(remaining)
+
+    def emit(self, stage: str, point: SetPoint | None) -> None:
+        self.on_event(
+            SweepEvent(stage, point, self.completed, len(self.plan.set_points), self.eta_s())
+        )
+
+
+def _move(rig: Rig, point: SetPoint) -> None:
+    rig.set_pitch(point.pitch_rad)
+    rig.set_tunnel_velocity(point.tunnel_velocity_m_s)
+    rig.set_flapping_frequency(point.flapping_frequency_hz)
+
+
+def _wait_rig_s(rig: Rig, seconds: float, pump: _BalancePump) -> None:
+    """Wait ``seconds`` of rig time, checking the balance stream for errors."""
+    rig.wait_simulated_s(seconds)
+    pump.raise_if_failed()
+
+
+def _settle(rig: Rig, point: SetPoint, criteria: SettleCriteria, pump: _BalancePump) -> float:
+    """Wait until pitch, velocity and frequency stay within tolerance; return the rig time it took, s."""
+    targets = (
+        (
+            "pitch",
+            rig.read_pitch_rad,
+            point.pitch_rad,
+            criteria.pitch_tolerance_rad,
+            math.degrees,
+            "deg",
+        ),
+        (
+            "tunnel velocity",
+            rig.read_tunnel_velocity_m_s,
+            point.tunnel_velocity_m_s,
+            criteria.velocity_tolerance_m_s,
+            float,
+            "m/s",
+        ),
+        (
+            "flapping frequency",
+            rig.read_flapping_frequency_hz,
+            point.flapping_frequency_hz,
+            criteria.frequency_tolerance_hz,
+            float,
+            "Hz",
+        ),
+    )
+    started_s = rig.now_s()
+    stable_since_s: float | None = None
+    while True:
+        readings = [
+            (name, read(), target, tolerance, to_user, unit)
+            for name, read, target, tolerance, to_user, unit in targets
+        ]
+        off = [reading for reading in readings if abs(reading[1] - reading[2]) > reading[3]]
+        now_s = rig.now_s()
+        if off:
+            stable_since_s = None
+            if now_s - started_s > criteria.timeout_s:
+                name, value, target, _, to_user, unit = off[0]
+                raise SettleTimeout(
+                    name,
+                    f"set point #{point.index} not reached within {criteria.timeout_s:g} s: reads "
+                    f"{to_user(value):.3f} {unit}, set {to_user(target):.3f} {unit}",
+                )
+        elif stable_since_s is None:
+            stable_since_s = now_s
+        elif now_s - stable_since_s >= criteria.stable_for_s:
+            return now_s - started_s
+        _wait_rig_s(rig, POLL_INTERVAL_S, pump)
+
+
+def _record_point(
+    rig: Rig,
+    recorder: Recorder,
+    pump: _BalancePump,
+    point: SetPoint,
+    sample_rate_hz: float,
+    settle_s: float,
+) -> SetPointRecord:
+    """Take the next ``record_s`` of the stream as this point's rows and journal it."""
+    _wait_rig_s(rig, RECORD_START_DELAY_S, pump)
+    first = recorder.next_sample_index
+    count = int(round(point.record_s * sample_rate_hz))
+    while recorder.next_sample_index < first + count:
+        _wait_rig_s(rig, 0.05, pump)
+    record = SetPointRecord(
+        plan_point_index=point.index,
+        kind=point.kind,
+        first_sample_index=first,
+        last_sample_index=first + count - 1,
+        pitch_rad=point.pitch_rad,
+        tunnel_velocity_m_s=point.tunnel_velocity_m_s,
+        flapping_frequency_hz=point.flapping_frequency_hz,
+        tail_attached=point.tail_attached,
+        repeat_index=point.repeat,
+        settle_time_s=settle_s,
+        motor_rpm_mean=rig.motor.read_rpm() if rig.motor is not None else None,
+        extra={
+            "sweep": point.sweep,
+            "pitch_measured_rad": rig.read_pitch_rad(),
+            "tunnel_velocity_fan_m_s": rig.read_tunnel_velocity_m_s(),
+        },
+    )
+    recorder.complete_set_point(record)
+    return record
+
+
+def _run_tail_state(
+    context: _SweepContext,
+    data_root: Path,
+    points: list[SetPoint],
+    previous_run_id: str | None,
+    run_directories: list[Path],
+) -> str:
+    """Record ``points`` (all of one tail state) into one new run; return its run id."""
+    plan, rig = context.plan, context.rig
+    balance = rig.balance
+    assert isinstance(balance, SerialDaqDriver)
+    stream = StreamLayout(
+        channels=[ChannelSpec(name, "V") for name in CHANNEL_NAMES],
+        sample_rate_hz=plan.sample_rate_hz,
+        sample_dtype="float32",
+        counter_dtype="uint32",
+    )
+    configuration = RunConfiguration(
+        tail_id=plan.tail_id,
+        x_h_m=plan.x_h_m,
+        tailed=points[0].tail_attached,
+        plan_name=plan.name,
+        resumed_from_run_id=previous_run_id,
+    )
+    rig_description = {
+        "name": rig.description.name,
+        "file": str(rig.description.path),
+        "simulated": rig.description.simulated,
+        "time_scale": rig.description.time_scale,
+        "balance_route": rig.description.balance_route,
+        "tool_transform_mm_deg": list(rig.description.tool_transform.as_mm_deg()),
+    }
+    calibration_files = {
+        "balance": rig.description.calibration_path,
+        "tunnel_table": rig.description.tunnel_table_path,
+    }
+    with Recorder(
+        data_root,
+        configuration,
+        stream,
+        rig_description=rig_description,
+        calibration_files=calibration_files,
+        display_decimation=None,
+    ) as recorder:
+        run_directories.append(recorder.run_directory)
+        rig.start_balance(plan.sample_rate_hz)
+        pump = _BalancePump(balance, recorder)
+        pump.start()
+        try:
+            for point in points:
+                if context.stop.requested:
+                    raise RunAborted(f"stopped by the operator before set point #{point.index}")
+                started_s = rig.now_s()
+                context.emit("moving", point)
+                _move(rig, point)
+                settle_s = _settle(rig, point, plan.settle, pump)
+                context.emit("settled", point)
+                _record_point(rig, recorder, pump, point, plan.sample_rate_hz, settle_s)
+                context.completed += 1
+                context.durations_s.append(rig.now_s() - started_s)
+                context.emit("recorded", point)
+        finally:
+            pump.stop()
+            rig.stop_balance()
+        return recorder.run_id
+
+
+def run_sweep(
+    plan: SweepPlan,
+    rig: Rig,
+    data_root: Path,
+    *,
+    resume: bool = False,
+    stop: SweepStop | None = None,
+    on_event: Callable[[SweepEvent], None] | None = None,
+    operator_prompt: Callable[[str], None] | None = None,
+) -> SweepResult:
+    """Run ``plan`` on a connected ``rig``, recording under ``data_root``.
+
+    Parameters
+    ----------
+    plan : SweepPlan
+        The checked plan (see :func:`ornitail.acquisition.sweep_plan.load_plan`).
+    rig : Rig
+        A connected rig.
+    data_root : pathlib.Path
+        Where runs and the catalog live.
+    resume : bool
+        Continue the newest sweep of this plan at its first unfinished set point.
+    stop : SweepStop, optional
+        Set it (e.g. on the first Ctrl-C) to stop after the current point.
+    on_event : callable, optional
+        Receives a :class:`SweepEvent` at every stage (progress bars, GUIs).
+    operator_prompt : callable, optional
+        Called with an instruction when a person must act (fit or remove the tail on a real rig).
+
+    Raises
+    ------
+    UserInputError
+        If the plan does not fit the rig (every violation listed), before anything moves.
+    InstrumentError
+        If an instrument fails; the runs so far keep their data and end as ``failed``.
+    KeyboardInterrupt
+        Passed on after the run is closed as ``aborted`` and the rig made safe.
+    """
+    check_plan_against_rig(plan, rig)
+    data_root = Path(data_root)
+    stop = stop or SweepStop()
+    chain = previous_sweep_chain(RunCatalog(data_root), plan) if resume else []
+    done = completed_plan_points(chain)
+    remaining = [point for point in plan.set_points if point.index not in done]
+    result = SweepResult(
+        status="completed",
+        run_directories=list(chain),
+        completed_points=len(done),
+        total_points=len(plan.set_points),
+    )
+    if not remaining:
+        result.message = "nothing to do: every set point of this plan is already recorded"
+        return result
+    context = _SweepContext(plan, rig, stop, on_event or (lambda event: None), completed=len(done))
+    previous_run_id = chain[-1].name if chain else None
+    rig.mount_vehicle(plan.tail_id, plan.x_h_m)
+    try:
+        for tail_attached, group in groupby(remaining, key=lambda point: point.tail_attached):
+            context.emit("tail_change", None)
+            rig.change_tail(tail_attached, operator_prompt or _refuse_operator_action)
+            previous_run_id = _run_tail_state(
+                context, data_root, list(group), previous_run_id, result.run_directories
+            )
+            if stop.requested and context.completed < len(plan.set_points):
+                raise RunAborted("stopped by the operator")
+    except RunAborted as reason:
+        result.status, result.message = "aborted", str(reason)
+    except InstrumentError as error:
+        result.status, result.message = "failed", str(error)
+    finally:
+        rig.safe_state()
+        result.completed_points = context.completed
+    if result.status == "completed":
+        result.message = f"recorded {result.completed_points} of {result.total_points} set points"
+    return result
+
+
+def _refuse_operator_action(instruction: str) -> None:
+    raise UserInputError(
+        "operator", f"this rig needs a person to act ({instruction}) but none was asked"
+    )

@@ -1,0 +1,160 @@
+"""Sweeps on the simulated rig: recording, limits checked first, stop and resume, unplugged instruments.
+
+The sweeps here use a short plan (2 pitches, 1 velocity offset, 0.6 s records) at the plugin's time scale, so a
+full tailed + tailless sweep takes a few seconds of wall time.
+"""
+
+import math
+import threading
+
+import numpy as np
+import pytest
+
+from ornitail.acquisition.catalog import RunCatalog
+from ornitail.acquisition.instrument_errors import InstrumentError
+from ornitail.acquisition.recording_reader import load_recording
+from ornitail.acquisition.sweep import SweepStop, run_sweep
+from ornitail.acquisition.sweep_plan import plan_from_document
+from ornitail.balance.sweep_table import cycle_averaged_table
+from ornitail.core.errors import UserInputError
+
+SHORT_PLAN = {
+    "plan": {"name": "short"},
+    "configuration": {"tail_id": "S3", "x_h_mm": 98},
+    "steady_state": {"theta_deg": 25.0, "v_m_s": 0.8, "f_hz": 13.5},
+    "sweeps": {"theta_deg": [3.0], "v_m_s": [0.2]},
+    "protocol": {"steady_state_repeats": 1, "record_s": 0.6, "tailless_points": "steady_state"},
+    "settle": {"stable_for_s": 0.3, "timeout_s": 60},
+}
+
+
+def motor_spins_down(rig, within_rig_s=5.0):
+    """True once the motor reads below 0.2 Hz flapping within ``within_rig_s`` of rig time (it coasts down)."""
+    for _ in range(int(within_rig_s / 0.1)):
+        if rig.read_flapping_frequency_hz() < 0.2:
+            return True
+        rig.wait_simulated_s(0.1)
+    return False
+
+
+def short_plan(**protocol):
+    document = {key: dict(value) for key, value in SHORT_PLAN.items()}
+    document["protocol"].update(protocol)
+    return plan_from_document(document, "short.toml")
+
+
+@pytest.fixture
+def simulated_time_scale():
+    # Faster than the plugin default is not possible for the serial DAQ: at 10 kHz x 5 the pty carries
+    # 50 k frames/s, which two busy cores still sustain.
+    return 5.0
+
+
+def test_sweep_records_every_point_in_two_runs_with_tares(simulated_rig, tmp_path):
+    plan = short_plan()
+    result = run_sweep(plan, simulated_rig, tmp_path)
+    assert result.status == "completed"
+    assert result.completed_points == result.total_points == len(plan.set_points) == 7
+    assert len(result.run_directories) == 2
+    tailed, tailless = (load_recording(directory) for directory in result.run_directories)
+    assert tailed.status == tailless.status == "completed"
+    assert tailless.metadata["configuration"]["resumed_from_run_id"] == tailed.run_id
+    journal_indices = sorted(
+        int(i)
+        for recording in (tailed, tailless)
+        for i in recording.set_points_frame()["plan_point_index"]
+    )
+    assert journal_indices == list(range(7))
+    frame = tailed.set_points_frame()
+    rows = frame["last_sample_index"] - frame["first_sample_index"] + 1
+    assert (rows == 6000).all()  # 0.6 s at 10 kHz
+    # The stream never pauses: no counter gaps, nothing lost, on the simulated link.
+    assert tailed.counter_gaps() == []
+    # The rig reached each set point: measured pitch within the settle tolerance.
+    for _, row in frame.iterrows():
+        assert abs(row["pitch_measured_rad"] - row["pitch_rad"]) <= math.radians(0.2)
+    # Motor and fan were left off.
+    assert motor_spins_down(simulated_rig)
+    assert simulated_rig.read_tunnel_velocity_m_s() < 0.8
+    table = cycle_averaged_table(result.run_directories)
+    assert len(table) == 4  # 2 tailed sweep points + 1 tailed and 1 tailless steady state
+    # A 0.6 s record at 13.5 Hz holds 8 flap periods; at least 6 whole accepted cycles are expected.
+    assert (table["cycles"] >= 6).all()
+    np.testing.assert_allclose(table["f_hall_hz"], 13.5, atol=0.1)
+    catalog_runs = RunCatalog(tmp_path).find_runs()
+    assert sorted(run.exit_status for run in catalog_runs) == ["completed", "completed"]
+
+
+def test_plan_outside_limits_is_refused_before_anything_moves(simulated_rig, tmp_path):
+    plan = short_plan()
+    document = {key: dict(value) for key, value in SHORT_PLAN.items()}
+    document["sweeps"] = {
+        "theta_deg": [30.0],
+        "f_hz": [3.0],
+    }  # 55 deg > 45 deg limit; 16.5 Hz > 16 Hz limit
+    plan = plan_from_document(document, "short.toml")
+    pitch_before = simulated_rig.read_pitch_rad()
+    with pytest.raises(UserInputError) as raised:
+        run_sweep(plan, simulated_rig, tmp_path)
+    message = str(raised.value)
+    assert (
+        "3 set point(s) outside the rig's limits" in message
+    )  # tare + point at 55 deg, 16.5 Hz point
+    assert "theta = 55.000 deg" in message and "f = 16.500 Hz" in message
+    assert simulated_rig.read_pitch_rad() == pytest.approx(pitch_before, abs=1e-9)
+    assert not (tmp_path / "runs").exists()
+
+
+def test_stop_request_finishes_the_point_and_resume_completes_the_rest(simulated_rig, tmp_path):
+    plan = short_plan()
+    stop = SweepStop()
+    seen = []
+
+    def on_event(event):
+        seen.append(event.stage)
+        if event.stage == "recorded" and event.completed == 2:
+            stop.request()
+
+    first = run_sweep(plan, simulated_rig, tmp_path, stop=stop, on_event=on_event)
+    assert first.status == "aborted"
+    assert first.completed_points == 2
+    aborted = load_recording(first.run_directories[0])
+    assert aborted.status == "aborted"
+    assert len(aborted.set_points_frame()) == 2
+    resumed = run_sweep(plan, simulated_rig, tmp_path, resume=True)
+    assert resumed.status == "completed"
+    assert resumed.completed_points == 7
+    new_runs = resumed.run_directories[1:]
+    resumed_indices = sorted(
+        int(i)
+        for directory in new_runs
+        for i in load_recording(directory).set_points_frame()["plan_point_index"]
+    )
+    assert resumed_indices == [2, 3, 4, 5, 6]
+    # Tares of the first run serve the resumed points: the whole chain processes.
+    assert len(cycle_averaged_table(resumed.run_directories)) == 4
+    again = run_sweep(plan, simulated_rig, tmp_path, resume=True)
+    assert again.completed_points == 7 and "nothing to do" in again.message
+
+
+def test_unplugged_fan_fails_the_run_naming_it_and_keeps_what_was_recorded(simulated_rig, tmp_path):
+    plan = short_plan()
+
+    def on_event(event):
+        if event.stage == "recorded" and event.completed == 2:
+            threading.Timer(0.05, simulated_rig.simulators.fan.unplug).start()
+
+    result = run_sweep(plan, simulated_rig, tmp_path, on_event=on_event)
+    assert result.status == "failed"
+    assert "fan" in result.message.lower()
+    recording = load_recording(result.run_directories[0])
+    assert recording.status == "failed"
+    assert len(recording.set_points_frame()) == 2
+    assert recording.sample_count >= 2 * 6000
+    # Motor was still brought to rest although the fan is gone.
+    assert motor_spins_down(simulated_rig)
+    with pytest.raises(InstrumentError):
+        simulated_rig.fan.read_rpm()
+    simulated_rig.close(
+        raise_errors=False
+    )  # the fan is gone; the fixture's own close would report it again
