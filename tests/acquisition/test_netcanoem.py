@@ -98,12 +98,13 @@ def can_driver(simulated_netcanoem):
 
 
 def test_polling_faster_than_the_bus_allows_is_refused_with_the_ceiling(can_driver):
-    with pytest.raises(
-        UserInputError, match=r"ceiling of 3279 samples/s .* 3953/s without stuffing"
-    ):
-        can_driver.start_polling(3500.0)
+    # 1 Mbit/s / 253 bits = 3953 samples/s (ATI's "about 3.9 k"); 3279/s with worst-case stuffing.
+    with pytest.raises(UserInputError, match=r"ceiling of 3953 samples/s .* 3279/s guaranteed"):
+        can_driver.check_sample_rate(4000.0)
     with pytest.raises(UserInputError):
         can_driver.start_polling(10_000.0)
+    with pytest.warns(UserWarning, match="above the 3279/s the bus guarantees"):
+        can_driver.check_sample_rate(3500.0)
 
 
 def test_queries_read_the_board_calibration(can_driver):
