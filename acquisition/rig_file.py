@@ -262,7 +262,7 @@ def read_rig_file(path: str | Path) -> RigDescription:
             f"{serial_daq.sample_rate_hz:g} Hz exceeds the serial link ceiling "
             f"{link_ceiling_frames_per_s(serial_daq.baud):g} Hz at {serial_daq.baud} baud",
         )
-    can_ceiling = gauge_sample_rate_ceiling_hz(can_settings.bit_rate)
+    can_ceiling = gauge_sample_rate_ceiling_hz(can_settings.bit_rate, worst_case_stuffing=False)
     if not needs_daq and can_settings.sample_rate_hz > can_ceiling:
         raise UserInputError(
             can.where("sample_rate_hz"),

@@ -61,9 +61,9 @@ class WakeProfile:
 
     enabled: bool = True
     peak_fraction_of_semi_span: float = 0.65
-    width_at_57mm_m: float = 0.055
-    width_at_126mm_m: float = 0.022
-    floor: float = 0.30
+    width_at_57mm_m: float = 0.0513
+    width_at_126mm_m: float = 0.0179
+    floor: float = 0.417
 
 
 @dataclass(frozen=True)
