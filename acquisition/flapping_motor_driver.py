@@ -6,14 +6,12 @@ The motor drives the wings through a gearbox; flapping frequency = rpm / 60 / ge
 
 from __future__ import annotations
 
-from ornitail.acquisition.line_instrument_connection import (
-    DEFAULT_LINE_BAUD,
-    LineInstrumentConnection,
-)
+from ornitail.acquisition.line_instrument_connection import DEFAULT_LINE_BAUD
+from ornitail.acquisition.line_instrument_driver import LineInstrumentDriver
 from ornitail.core.errors import UserInputError, require_finite
 
 
-class FlappingMotorDriver:
+class FlappingMotorDriver(LineInstrumentDriver):
     """Sets throttle or target rpm and reads the motor speed.
 
     Parameters
@@ -32,18 +30,8 @@ class FlappingMotorDriver:
         name: str = "flapping motor",
         baud: int = DEFAULT_LINE_BAUD,
     ) -> None:
-        self.name = name
+        super().__init__(port, name=name, baud=baud, safe_state_command="OFF")
         self.max_rpm = float(max_rpm)
-        self.connection = LineInstrumentConnection(port, name=name, baud=baud)
-
-    def open(self) -> str:
-        """Open the port and return the controller's ``ID?`` reply."""
-        self.connection.open()
-        return self.connection.query("ID?")
-
-    def close(self) -> None:
-        """Close the port (does not stop the motor; call :meth:`safe_state` first)."""
-        self.connection.close()
 
     def set_throttle(self, throttle_fraction: float) -> None:
         """Open-loop throttle, 0..1 of full power."""
@@ -68,7 +56,3 @@ class FlappingMotorDriver:
     def read_rpm(self) -> float:
         """Measured motor speed, rev/min."""
         return self.connection.query_value("RPM?", "RPM")
-
-    def safe_state(self) -> None:
-        """Switch the motor off."""
-        self.connection.command("OFF")

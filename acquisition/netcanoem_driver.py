@@ -16,12 +16,11 @@ answer, ends the thread with :class:`InstrumentDisconnected` (raised by ``get_bl
 
 from __future__ import annotations
 
-import warnings
-
 import contextlib
 import queue
 import threading
 import time
+import warnings
 from dataclasses import dataclass
 
 import can

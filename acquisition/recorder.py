@@ -579,7 +579,11 @@ class Recorder:
                     # per 0.1 s instead of per driver block (~10 ms) costs a tenth of the CPU.
                     wait_s = deadline - time.monotonic() if rows < min_rows_per_write else 0.0
                     try:
-                        item = self._queue.get(timeout=wait_s) if wait_s > 0 else self._queue.get_nowait()
+                        item = (
+                            self._queue.get(timeout=wait_s)
+                            if wait_s > 0
+                            else self._queue.get_nowait()
+                        )
                     except queue.Empty:
                         item = None
                 if blocks:

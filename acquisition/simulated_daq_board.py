@@ -36,6 +36,7 @@ from ornitail.acquisition.daq_protocol import (
 from ornitail.acquisition.pty_transport import PseudoTerminalPair
 from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
 from ornitail.acquisition.simulated_clock import SimulatedClock
+from ornitail.acquisition.simulated_device import SimulatedDevice
 
 HALL_THRESHOLD_V = 1.65  # half of the 3.3 V logic level of the Hall sensor
 HALL_HIGH_V = 3.3
@@ -43,7 +44,7 @@ FIRMWARE_VERSION = "1.0.0"
 MODEL = "ORNI-DAQ9"
 
 
-class SimulatedDaqBoard:
+class SimulatedDaqBoard(SimulatedDevice):
     """An ORNI-DAQ9 board simulator; the driver connects to :attr:`port_path`.
 
     Parameters
@@ -89,9 +90,8 @@ class SimulatedDaqBoard:
         self.port_path = self._pty.slave_path
         self._lock = threading.Lock()
         self._faults: deque[tuple[str, int | bytes]] = deque()
-        self._closing = threading.Event()
         self._unplug_requested = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="simulated DAQ board", daemon=True)
+        self._prepare_thread("simulated DAQ board")
         self._streaming = False
         self._next_counter = 0
         self._stream_start_s = 0.0
@@ -102,23 +102,8 @@ class SimulatedDaqBoard:
         self.unplugged = False
 
     # -- lifecycle --------------------------------------------------------------------------
-    def start(self) -> SimulatedDaqBoard:
-        """Start the board's thread; returns self."""
-        self._thread.start()
-        return self
-
-    def close(self) -> None:
-        """Stop the thread and close the pty."""
-        self._closing.set()
-        if self._thread.is_alive():
-            self._thread.join(2.0)
+    def _close_transport(self) -> None:
         self._pty.close()
-
-    def __enter__(self) -> SimulatedDaqBoard:
-        return self.start()
-
-    def __exit__(self, *exc_info: object) -> None:
-        self.close()
 
     # -- fault injection --------------------------------------------------------------------
     def inject_garbage(self, data: bytes) -> None:

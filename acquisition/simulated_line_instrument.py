@@ -12,6 +12,7 @@ import threading
 
 from ornitail.acquisition.pty_transport import PseudoTerminalPair
 from ornitail.acquisition.simulated_clock import SimulatedClock
+from ornitail.acquisition.simulated_device import SimulatedDevice
 
 
 def first_order_step(
@@ -31,7 +32,7 @@ def first_order_step(
     return value + max(-step_limit, min(step_limit, lagged - value))
 
 
-class SimulatedLineInstrument:
+class SimulatedLineInstrument(SimulatedDevice):
     """A simulated ASCII line instrument behind a pty; the driver opens :attr:`port_path`."""
 
     model = "ORNI-GENERIC"
@@ -48,32 +49,14 @@ class SimulatedLineInstrument:
         self.tick_period_s = tick_period_s
         self._pty = PseudoTerminalPair.open_raw()
         self.port_path = self._pty.slave_path
-        self._closing = threading.Event()
         self._unplug_requested = threading.Event()
         self._state_lock = threading.Lock()
-        self._thread = threading.Thread(
-            target=self._run, name=f"simulated {self.model}", daemon=True
-        )
+        self._prepare_thread(f"simulated {self.model}")
         self._last_time_s = clock.now_s()
         self.unplugged = False
 
-    def start(self):
-        """Start the thread; returns self."""
-        self._thread.start()
-        return self
-
-    def close(self) -> None:
-        """Stop the thread and close the pty."""
-        self._closing.set()
-        if self._thread.is_alive():
-            self._thread.join(2.0)
+    def _close_transport(self) -> None:
         self._pty.close()
-
-    def __enter__(self):
-        return self.start()
-
-    def __exit__(self, *exc_info: object) -> None:
-        self.close()
 
     def unplug(self) -> None:
         """Close the pty master, as a pulled cable."""

@@ -23,6 +23,7 @@ import numpy as np
 from ornitail.acquisition import netcanoem_protocol as protocol
 from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
 from ornitail.acquisition.simulated_clock import SimulatedClock
+from ornitail.acquisition.simulated_device import SimulatedDevice
 
 GAUGE_VOLTS_PER_COUNT = 10.24 / 32768.0
 COUNTS_PER_FORCE = 1_000_000  # counts per N
@@ -32,7 +33,7 @@ TORQUE_UNIT_CODE = 3  # N-m
 FIRMWARE = (2, 1, 7)
 
 
-class SimulatedNetCanOemBoard:
+class SimulatedNetCanOemBoard(SimulatedDevice):
     """A NETCANOEM simulator on a virtual CAN channel.
 
     Parameters
@@ -77,28 +78,12 @@ class SimulatedNetCanOemBoard:
         self._forced_gauges: dict[int, int] = {}
         self._pending_error_frames = 0
         self._lock = threading.Lock()
-        self._closing = threading.Event()
         self._unplugged = threading.Event()
         self._bus = can.Bus(interface="virtual", channel=channel)
-        self._thread = threading.Thread(target=self._run, name="simulated NETCANOEM", daemon=True)
+        self._prepare_thread("simulated NETCANOEM")
 
-    def start(self) -> SimulatedNetCanOemBoard:
-        """Start answering; returns self."""
-        self._thread.start()
-        return self
-
-    def close(self) -> None:
-        """Stop the thread and leave the bus."""
-        self._closing.set()
-        if self._thread.is_alive():
-            self._thread.join(2.0)
+    def _close_transport(self) -> None:
         self._bus.shutdown()
-
-    def __enter__(self) -> SimulatedNetCanOemBoard:
-        return self.start()
-
-    def __exit__(self, *exc_info: object) -> None:
-        self.close()
 
     # -- fault injection --------------------------------------------------------------------
     def inject_error_frames(self, count: int = 1) -> None:

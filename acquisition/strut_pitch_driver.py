@@ -10,10 +10,8 @@ import time
 from dataclasses import dataclass
 
 from ornitail.acquisition.instrument_errors import InstrumentReplyError
-from ornitail.acquisition.line_instrument_connection import (
-    DEFAULT_LINE_BAUD,
-    LineInstrumentConnection,
-)
+from ornitail.acquisition.line_instrument_connection import DEFAULT_LINE_BAUD
+from ornitail.acquisition.line_instrument_driver import LineInstrumentDriver
 from ornitail.core.errors import UserInputError, require_finite
 
 
@@ -25,7 +23,7 @@ class StrutStatus:
     moving: bool
 
 
-class StrutPitchDriver:
+class StrutPitchDriver(LineInstrumentDriver):
     """Sets and reads the pitch angle of the strut that holds the vehicle.
 
     Parameters
@@ -45,19 +43,9 @@ class StrutPitchDriver:
         name: str = "strut pitch actuator",
         baud: int = DEFAULT_LINE_BAUD,
     ) -> None:
-        self.name = name
+        super().__init__(port, name=name, baud=baud, safe_state_command="HALT")
         self.pitch_min_rad = float(pitch_min_rad)
         self.pitch_max_rad = float(pitch_max_rad)
-        self.connection = LineInstrumentConnection(port, name=name, baud=baud)
-
-    def open(self) -> str:
-        """Open the port and return the actuator's ``ID?`` reply."""
-        self.connection.open()
-        return self.connection.query("ID?")
-
-    def close(self) -> None:
-        """Close the port."""
-        self.connection.close()
 
     def status(self) -> StrutStatus:
         """Ask ``STATUS?``."""
@@ -103,7 +91,3 @@ class StrutPitchDriver:
                     self.name, f"{what} did not finish within {timeout_s:g} s"
                 )
             time.sleep(poll_interval_s)
-
-    def safe_state(self) -> None:
-        """Stop any motion and hold the current angle."""
-        self.connection.command("HALT")

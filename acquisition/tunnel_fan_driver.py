@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-from ornitail.acquisition.line_instrument_connection import (
-    DEFAULT_LINE_BAUD,
-    LineInstrumentConnection,
-)
+from ornitail.acquisition.line_instrument_connection import DEFAULT_LINE_BAUD
+from ornitail.acquisition.line_instrument_driver import LineInstrumentDriver
 from ornitail.core.errors import UserInputError, require_finite
 
 
-class TunnelFanDriver:
+class TunnelFanDriver(LineInstrumentDriver):
     """Sets and reads the tunnel fan speed, rev/min.
 
     Parameters
@@ -23,18 +21,8 @@ class TunnelFanDriver:
     def __init__(
         self, port: str, *, max_rpm: float, name: str = "tunnel fan", baud: int = DEFAULT_LINE_BAUD
     ) -> None:
-        self.name = name
+        super().__init__(port, name=name, baud=baud, safe_state_command="STOP")
         self.max_rpm = float(max_rpm)
-        self.connection = LineInstrumentConnection(port, name=name, baud=baud)
-
-    def open(self) -> str:
-        """Open the port and return the controller's ``ID?`` reply."""
-        self.connection.open()
-        return self.connection.query("ID?")
-
-    def close(self) -> None:
-        """Close the port (does not stop the fan; call :meth:`safe_state` first)."""
-        self.connection.close()
 
     def set_rpm(self, fan_rpm: float) -> None:
         """Command fan speed ``fan_rpm`` (rev/min); refused outside 0..max_rpm before sending."""
@@ -53,7 +41,3 @@ class TunnelFanDriver:
     def read_target_rpm(self) -> float:
         """Commanded fan speed, rev/min."""
         return self.connection.query_value("TARGET?", "TARGET")
-
-    def safe_state(self) -> None:
-        """Bring the fan to zero speed."""
-        self.connection.command("STOP")

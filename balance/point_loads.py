@@ -16,6 +16,7 @@ import numpy as np
 from ornitail.balance.cycle_averages import cycle_means
 from ornitail.balance.hall_cycles import HallEdgeSettings, flap_cycles
 from ornitail.calibration.ati_calibration import AtiCalibration
+from ornitail.core.errors import UserInputError
 
 BODY_LOAD_NAMES = ("x_n", "y_n", "z_n", "l_n_m", "m_n_m", "n_n_m")
 """Body-frame forces X, Y, Z (N) and moments L, M, N (N m) about the reference point; M positive nose-down."""
@@ -35,6 +36,8 @@ class CycleAveragedLoads:
         Mean flapping frequency over the accepted cycles, from the Hall line.
     rejected_cycles : int
         Cycles rejected by the period check.
+    tare_standard_error : numpy.ndarray
+        Shape (6,): standard error of the subtracted tare (its sample noise), same units as ``mean``.
     """
 
     per_cycle: np.ndarray
@@ -43,6 +46,12 @@ class CycleAveragedLoads:
     standard_error: np.ndarray
     flapping_frequency_hz: float
     rejected_cycles: int
+    tare_standard_error: np.ndarray
+
+    @property
+    def total_standard_error(self) -> np.ndarray:
+        """Standard error of the tare-corrected mean: cycle scatter and tare noise combined, shape (6,)."""
+        return np.hypot(self.standard_error, self.tare_standard_error)
 
     @property
     def cycle_count(self) -> int:
@@ -55,7 +64,7 @@ class CycleAveragedLoads:
         return 2.0 * self.spread
 
     def as_record(self) -> dict[str, float]:
-        """Flat dictionary: ``<load>``, ``<load>_2sigma``, ``<load>_se``, cycle count and frequency."""
+        """Flat dictionary: ``<load>``, ``<load>_2sigma``, ``<load>_se``, ``<load>_tare_se``, cycles, frequency."""
         record: dict[str, float] = {
             "cycles": self.cycle_count,
             "f_hall_hz": self.flapping_frequency_hz,
@@ -65,6 +74,7 @@ class CycleAveragedLoads:
             record[name] = float(self.mean[index])
             record[f"{name}_2sigma"] = float(self.two_sigma[index])
             record[f"{name}_se"] = float(self.standard_error[index])
+            record[f"{name}_tare_se"] = float(self.tare_standard_error[index])
         return record
 
 
@@ -75,6 +85,7 @@ def cycle_averaged_loads(
     tare_volts: np.ndarray,
     calibration: AtiCalibration,
     hall_settings: HallEdgeSettings | None = None,
+    tare_volts_standard_error: np.ndarray | None = None,
 ) -> CycleAveragedLoads:
     """Tare-corrected, cycle-averaged body-frame loads of one record.
 
@@ -92,6 +103,9 @@ def cycle_averaged_loads(
         Balance calibration whose tool transform gives the body frame at the vehicle reference point.
     hall_settings : HallEdgeSettings, optional
         Hall edge detection settings.
+    tare_volts_standard_error : numpy.ndarray, optional
+        Standard error of each tare voltage mean, shape (6,), V (see :func:`tare_volts_and_error`); propagated
+        through the calibration matrix into ``tare_standard_error``. Default: the tare is taken as exact.
     """
     cycles = flap_cycles(hall_v, sample_rate_hz, hall_settings)
     volts_per_cycle = cycle_means(np.asarray(gauge_volts, dtype=float), cycles, sample_rate_hz)
@@ -106,4 +120,26 @@ def cycle_averaged_loads(
         standard_error=spread / np.sqrt(len(per_cycle)),
         flapping_frequency_hz=float(cycles.frequency_hz.mean()),
         rejected_cycles=cycles.rejected_count,
+        tare_standard_error=_propagated_standard_error(calibration, tare_volts_standard_error),
     )
+
+
+def tare_volts_and_error(tare_gauge_volts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mean of a wind-off tare record and its standard error, each shape (6,), V.
+
+    The motor is off during a tare, so the samples carry only gauge noise, taken as independent.
+    """
+    samples = np.asarray(tare_gauge_volts, dtype=float)
+    if len(samples) < 2:
+        raise UserInputError("tare", f"a tare needs at least 2 samples, got {len(samples)}")
+    return samples.mean(axis=0), samples.std(axis=0, ddof=1) / np.sqrt(len(samples))
+
+
+def _propagated_standard_error(
+    calibration: AtiCalibration, volts_standard_error: np.ndarray | None
+) -> np.ndarray:
+    if volts_standard_error is None:
+        return np.zeros(6)
+    matrix = calibration.matrix_si
+    variance = (matrix**2) @ (np.asarray(volts_standard_error, dtype=float) ** 2)
+    return np.sqrt(variance)

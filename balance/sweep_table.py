@@ -17,8 +17,18 @@ import numpy as np
 import pandas as pd
 
 from ornitail.acquisition.recording_reader import Recording, load_recording
-from ornitail.balance.point_loads import BODY_LOAD_NAMES, cycle_averaged_loads
+from ornitail.balance.hall_cycles import HallEdgeSettings
+from ornitail.balance.point_loads import (
+    BODY_LOAD_NAMES,
+    CycleAveragedLoads,
+    cycle_averaged_loads,
+    tare_volts_and_error,
+)
 from ornitail.calibration.ati_calibration import AtiCalibration
+from ornitail.calibration.flapping_frequency_check import (
+    FLAPPING_GEAR_RATIO,
+    check_flapping_frequency,
+)
 from ornitail.calibration.tool_transform import ToolTransform
 from ornitail.core.errors import UserInputError
 from ornitail.core.hashing import content_hash_of_file
@@ -54,6 +64,60 @@ class _RecordedPoint:
     order: tuple[str, int]
 
 
+@dataclass(frozen=True)
+class MeasuredSetPoint:
+    """One measured (not tare) set point with the tare and calibration that turn it into body loads.
+
+    Attributes
+    ----------
+    recording : Recording
+        The run the point was recorded in.
+    row : pandas.Series
+        The point's row of :meth:`Recording.set_points_frame` (set values in SI, ``sweep``, ``motor_rpm_mean``).
+    tare_volts, tare_volts_standard_error : numpy.ndarray
+        Mean gauge voltages of the newest earlier wind-off tare at the same pitch and tail state, and their
+        standard error, shape (6,), V.
+    calibration : AtiCalibration
+        Balance calibration with the rig's tool transform (body frame at the rig's reference point).
+    tare_id : str
+        ``<run id>#<plan point index>`` of the tare used (points sharing it share its error).
+    """
+
+    recording: Recording
+    row: pd.Series
+    tare_volts: np.ndarray
+    tare_volts_standard_error: np.ndarray
+    calibration: AtiCalibration
+    tare_id: str
+
+    def gauge_and_hall_volts(self) -> tuple[np.ndarray, np.ndarray]:
+        """Raw gauge voltages (n, 6) and Hall line (n,) of the point, V."""
+        frame = self.recording.set_point_frame(int(self.row["set_point_index"]))
+        return (
+            frame[list(GAUGE_CHANNELS)].to_numpy(dtype=float),
+            frame["hall_v"].to_numpy(dtype=float),
+        )
+
+    def loads(self, hall_settings: HallEdgeSettings | None = None) -> CycleAveragedLoads:
+        """Tare-corrected cycle-averaged body loads of the point."""
+        gauge_volts, hall_v = self.gauge_and_hall_volts()
+        try:
+            return cycle_averaged_loads(
+                gauge_volts,
+                hall_v,
+                self.recording.sample_rate_hz,
+                self.tare_volts,
+                self.calibration,
+                hall_settings,
+                tare_volts_standard_error=self.tare_volts_standard_error,
+            )
+        except UserInputError as error:
+            raise UserInputError(
+                f"{self.recording.run_directory}: set point {int(self.row['plan_point_index'])}",
+                error.problem,
+            ) from None
+
+
 def _recorded_points(run_directories: Iterable[Path]) -> list[_RecordedPoint]:
     points = []
     for directory in run_directories:
@@ -70,18 +134,8 @@ def _recorded_points(run_directories: Iterable[Path]) -> list[_RecordedPoint]:
     return sorted(points, key=lambda point: point.order)
 
 
-def _mean_gauge_volts(point: _RecordedPoint) -> np.ndarray:
-    frame = point.recording.set_point_frame(int(point.row["set_point_index"]))
-    return frame[list(GAUGE_CHANNELS)].to_numpy(dtype=float).mean(axis=0)
-
-
-def cycle_averaged_table(run_directories: Iterable[Path | str]) -> pd.DataFrame:
-    """One row per measured set point of the given runs, in recording order.
-
-    Columns: ``run_id``, ``plan_point_index``, ``sweep``, ``tailed``, ``repeat``, ``theta_deg``, ``v_m_s``,
-    ``f_set_hz``, ``f_hall_hz``, ``cycles``, ``rejected_cycles``, and for each body load of
-    :data:`~ornitail.balance.point_loads.BODY_LOAD_NAMES` its mean, ``_2sigma`` (2 sigma over cycles) and ``_se``
-    (standard error of the mean). Loads are in N and N m, body frame, about the rig's reference point.
+def measured_set_points(run_directories: Iterable[Path | str]) -> list[MeasuredSetPoint]:
+    """Every measured set point of the given runs in recording order, each paired with its tare.
 
     Raises
     ------
@@ -89,15 +143,19 @@ def cycle_averaged_table(run_directories: Iterable[Path | str]) -> pd.DataFrame:
         If a measurement has no earlier tare at its pitch and tail state, or a calibration file changed.
     """
     points = _recorded_points(Path(directory) for directory in run_directories)
-    tares: dict[tuple[bool, float], np.ndarray] = {}
+    tares: dict[tuple[bool, float], tuple[np.ndarray, np.ndarray, str]] = {}
     calibrations: dict[str, AtiCalibration] = {}
-    rows = []
+    measured = []
     for point in points:
         row = point.row
         tailed = bool(row["tail_attached"])
         pitch_key = round(float(row["pitch_rad"]), 9)
         if row["kind"] == "tare":
-            tares[(tailed, pitch_key)] = _mean_gauge_volts(point)
+            frame = point.recording.set_point_frame(int(row["set_point_index"]))
+            tares[(tailed, pitch_key)] = (
+                *tare_volts_and_error(frame[list(GAUGE_CHANNELS)].to_numpy(dtype=float)),
+                f"{point.recording.run_id}#{int(row['plan_point_index'])}",
+            )
             continue
         tare = tares.get((tailed, pitch_key))
         if tare is None:
@@ -109,60 +167,144 @@ def cycle_averaged_table(run_directories: Iterable[Path | str]) -> pd.DataFrame:
         run_id = point.recording.run_id
         if run_id not in calibrations:
             calibrations[run_id] = balance_calibration_of(point.recording)
-        frame = point.recording.set_point_frame(int(row["set_point_index"]))
-        loads = cycle_averaged_loads(
-            frame[list(GAUGE_CHANNELS)].to_numpy(dtype=float),
-            frame["hall_v"].to_numpy(dtype=float),
-            point.recording.sample_rate_hz,
-            tare,
-            calibrations[run_id],
+        measured.append(
+            MeasuredSetPoint(point.recording, row, tare[0], tare[1], calibrations[run_id], tare[2])
         )
+    return measured
+
+
+def _frequency_check_record(hall_frequency_hz: float, motor_rpm: object) -> dict[str, object]:
+    """Hall against motor frequency for one point; no rpm reading gives NaN and no flag."""
+    if motor_rpm is None or not np.isfinite(float(motor_rpm)):  # type: ignore[arg-type]
+        return {
+            "motor_rpm": math.nan,
+            "f_motor_hz": math.nan,
+            "f_disagreement": math.nan,
+            "f_disagrees": False,
+        }
+    check = check_flapping_frequency(hall_frequency_hz, float(motor_rpm))  # type: ignore[arg-type]
+    return {
+        "motor_rpm": float(motor_rpm),  # type: ignore[arg-type]
+        "f_motor_hz": float(check.motor_frequency_hz),
+        "f_disagreement": float(check.relative_disagreement),
+        "f_disagrees": bool(check.disagrees),
+    }
+
+
+def cycle_averaged_table(run_directories: Iterable[Path | str]) -> pd.DataFrame:
+    """One row per measured set point of the given runs, in recording order.
+
+    Columns: ``run_id``, ``tail_id``, ``x_h_mm``, ``plan_point_index``, ``sweep``, ``tailed``, ``repeat``,
+    ``theta_deg``, ``v_m_s``, ``f_set_hz``, ``tare_id`` (``<run id>#<plan point index>`` of the tare used),
+    ``f_hall_hz``, ``cycles``, ``rejected_cycles``, the flapping
+    frequency cross-check ``motor_rpm``, ``f_motor_hz`` (= rpm / 60 / 21.33), ``f_disagreement`` ((Hall - motor) /
+    motor) and ``f_disagrees`` (beyond 2 %), and for each body load of
+    :data:`~ornitail.balance.point_loads.BODY_LOAD_NAMES` its mean, ``_2sigma`` (2 sigma over cycles), ``_se``
+    (standard error of the mean over cycles) and ``_tare_se`` (standard error of the subtracted tare). Loads are
+    in N and N m, body frame, about the rig's reference point.
+
+    Raises
+    ------
+    UserInputError
+        If a measurement has no earlier tare at its pitch and tail state, a calibration file changed, or a
+        record holds too few flapping cycles.
+    """
+    rows = []
+    for point in measured_set_points(run_directories):
+        row = point.row
+        loads = point.loads()
+        configuration = point.recording.metadata.get("configuration", {})
+        x_h_m = configuration.get("x_h_m")
         rows.append(
             {
-                "run_id": run_id,
+                "run_id": point.recording.run_id,
+                "tail_id": configuration.get("tail_id") or "",
+                "x_h_mm": math.nan if x_h_m is None else 1000.0 * float(x_h_m),
                 "plan_point_index": int(row["plan_point_index"]),
                 "sweep": row.get("sweep", ""),
-                "tailed": tailed,
+                "tailed": bool(row["tail_attached"]),
                 "repeat": int(row["repeat_index"]),
                 "theta_deg": math.degrees(float(row["pitch_rad"])),
                 "v_m_s": float(row["tunnel_velocity_m_s"]),
                 "f_set_hz": float(row["flapping_frequency_hz"]),
+                "tare_id": point.tare_id,
                 **loads.as_record(),
+                **_frequency_check_record(loads.flapping_frequency_hz, row.get("motor_rpm_mean")),
             }
         )
     return pd.DataFrame(rows)
 
 
+def frequency_check_warnings(table: pd.DataFrame) -> list[str]:
+    """One line per set point whose Hall and motor flapping frequencies disagree by more than 2 %."""
+    lines = []
+    for _, row in table[table["f_disagrees"].astype(bool)].iterrows():
+        lines.append(
+            f"warning: {row['run_id']} set point {int(row['plan_point_index'])} ({row['sweep']}): Hall "
+            f"{row['f_hall_hz']:.3f} Hz vs motor {row['f_motor_hz']:.3f} Hz (rpm / 60 / "
+            f"{FLAPPING_GEAR_RATIO}), {100 * row['f_disagreement']:+.1f} %: slipping gear, missed Hall "
+            "edges or a wrong rpm channel"
+        )
+    return lines
+
+
+def _pooled_repeats(group: pd.DataFrame, name: str) -> pd.Series:
+    """Mean of the repeat means of one load and its standard error (see :func:`tail_contribution`)."""
+    means = group[name].to_numpy(dtype=float)
+    count = len(means)
+    within = math.sqrt(
+        float((group[f"{name}_se"] ** 2).sum()) / count**2
+        + float(group[f"{name}_tare_se"].mean()) ** 2
+    )
+    between = float(np.std(means, ddof=1)) / math.sqrt(count) if count > 1 else 0.0
+    return pd.Series(
+        {
+            name: float(means.mean()),
+            f"{name}_se": max(within, between),
+            f"{name}_cycle_2sigma": float(group[f"{name}_2sigma"].mean()),
+            "repeats": count,
+            "cycles": int(group["cycles"].sum()),
+        }
+    )
+
+
 def tail_contribution(table: pd.DataFrame) -> pd.DataFrame:
     """Tailed minus tailless at every set point measured both ways, with propagated uncertainty.
 
-    Repeats are pooled: the mean of the repeat means, with standard error from the per-repeat standard errors
-    (``sqrt(sum se^2) / n``). ``<load>_sigma`` is the standard error of the difference; ``<load>_resolvable``
-    says whether the difference exceeds both twice that sigma and the balance resolution (forces only; moments
-    use twice sigma alone).
+    Repeats are pooled: the mean of the repeat means. Its standard error is the larger of (a) the propagated one,
+    ``sqrt(sum se^2 / n^2 + tare_se^2)`` (the repeats share one tare, so its error does not average out), and
+    (b) the scatter of the repeat means, ``std / sqrt(n)`` (catches drift between repeats that the cycle
+    scatter cannot see). ``<load>_sigma`` is the standard error of the difference (tailed and tailless
+    independent); ``<load>_resolvable`` says whether the difference exceeds both twice that sigma and, for
+    forces, the balance resolution (moments: twice sigma alone); ``<load>_cycle_2sigma_tailed`` and
+    ``_tailless`` are the single-cycle scatter (2 sigma over cycles). Loads about the rig's reference point, so
+    tailed and tailless moments are about the same point.
     """
     keys = ["theta_deg", "v_m_s", "f_set_hz"]
     rounded = table.assign(**{key: table[key].round(6) for key in keys})
     pooled = {}
     for tailed, group in rounded.groupby("tailed"):
-        aggregations = {}
-        for name in BODY_LOAD_NAMES:
-            aggregations[name] = group.groupby(keys)[name].mean()
-            aggregations[f"{name}_se"] = group.groupby(keys)[f"{name}_se"].apply(
-                lambda se: float(np.sqrt((se**2).sum()) / len(se))
-            )
-        pooled[bool(tailed)] = pd.DataFrame(aggregations)
+        pooled[bool(tailed)] = {
+            name: group.groupby(keys)[list(group.columns)].apply(_pooled_repeats, name)
+            for name in BODY_LOAD_NAMES
+        }
     if True not in pooled or False not in pooled:
         return pd.DataFrame()
-    common = pooled[True].index.intersection(pooled[False].index)
+    common = pooled[True][BODY_LOAD_NAMES[0]].index.intersection(
+        pooled[False][BODY_LOAD_NAMES[0]].index
+    )
     result = pd.DataFrame(index=common)
+    for state, label in ((True, "tailed"), (False, "tailless")):
+        result[f"repeats_{label}"] = pooled[state][BODY_LOAD_NAMES[0]].loc[common, "repeats"]
+        result[f"cycles_{label}"] = pooled[state][BODY_LOAD_NAMES[0]].loc[common, "cycles"]
     for name in BODY_LOAD_NAMES:
-        difference = pooled[True].loc[common, name] - pooled[False].loc[common, name]
-        sigma = np.hypot(
-            pooled[True].loc[common, f"{name}_se"], pooled[False].loc[common, f"{name}_se"]
-        )
+        tailed, tailless = pooled[True][name].loc[common], pooled[False][name].loc[common]
+        difference = tailed[name] - tailless[name]
+        sigma = np.hypot(tailed[f"{name}_se"], tailless[f"{name}_se"])
         threshold = np.maximum(2 * sigma, BALANCE_RESOLUTION_N if name.endswith("_n") else 0.0)
         result[name] = difference
         result[f"{name}_sigma"] = sigma
         result[f"{name}_resolvable"] = np.abs(difference) > threshold
+        result[f"{name}_cycle_2sigma_tailed"] = tailed[f"{name}_cycle_2sigma"]
+        result[f"{name}_cycle_2sigma_tailless"] = tailless[f"{name}_cycle_2sigma"]
     return result.reset_index()

@@ -72,7 +72,7 @@ class AddedMass:
     dy``.
 
     Adds to the effective I_yy (it acts like an M_qdot term). Wings: ``wing_count`` flat plates of
-    chord ``wing_chord_m`` and span ``wing_span_m`` at the wings' pressure centre.
+    chord ``wing_chord_m`` and span ``wing_span_m`` centred at the wings' mid-chord.
     """
 
     enabled: bool = True

@@ -120,12 +120,14 @@ class PreparedVehicle:
         if self.environment != "flight" or not added.enabled:
             return 0.0
         plate = AIR_DENSITY_KG_M3 * math.pi / 4.0 * added.coefficient
+        # the wing plates' added mass acts at their mid-chord (m), not at the counter force's point
+        wing_mid_chord_arm = added.wing_chord_m / 2.0 - self.mass.cg_station_m
         wings = (
             plate
             * added.wing_count
             * added.wing_chord_m**2
             * added.wing_span_m
-            * (self.wing_arm_m**2 + added.wing_chord_m**2 / 32.0)
+            * (wing_mid_chord_arm**2 + added.wing_chord_m**2 / 32.0)
         )
         if self.strips is None:
             return wings

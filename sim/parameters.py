@@ -26,7 +26,7 @@ class VehicleParameters:
     front_mass_kg: float = 0.0083  # estimate: motor, gearbox, crank, wings
     front_station_m: float = 0.004  # estimate
     front_own_iyy_kg_m2: float = 0.5e-6  # estimate: wings and mechanism spread about their centre
-    electronics_mass_kg: float = 0.0086  # estimate: battery, autopilot, receiver
+    electronics_mass_kg: float = 0.0087  # estimate: battery, autopilot, receiver
     electronics_station_m: float = 0.052  # study: x_e ~ 52 mm
     electronics_own_iyy_kg_m2: float = 0.5e-6  # estimate
     fuselage_start_station_m: float = -0.010  # estimate: rod starts 10 mm ahead of the wing LE

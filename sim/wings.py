@@ -3,8 +3,8 @@ harmonics.
 
 Cycle-averaged part (body frame of docs/frames.md, about the CG):
 
-- thrust along -z_b: ``T = k_T s_T f^2 + k_w f w_wing`` (inflow along the fuselage, w_wing < 0,
-  reduces it);
+- thrust along -z_b: ``T = k_T s_T f^2 + k_w f w + k_u f u_wing^2`` (inflow along the fuselage,
+  w < 0, reduces it; cross-flow raises it: translational lift, the wings meet more air per stroke);
 - flapping counter force along x_b: ``X = -c_X s_X (1 + kappa) (1 - k_ax w / v_tip) f u_wing`` with
   ``u_wing = u + q z_wing`` the x_b airspeed at the wings' pressure centre; axial inflow along the
   fuselage (w < 0) strengthens it (the wing sections meet the cross-flow at a higher total speed;

@@ -90,10 +90,10 @@ def test_relative_paths_resolve_against_the_rig_file_folder(tmp_path):
         (
             {
                 'route = "serial_daq"': 'route = "can"',
-                "sample_rate_hz = 2000.0": "sample_rate_hz = 3500.0",
+                "sample_rate_hz = 2000.0": "sample_rate_hz = 4000.0",
             },
             "[balance.can].sample_rate_hz",
-            "exceeds the CAN ceiling 3279 samples/s",
+            "exceeds the CAN ceiling 3953 samples/s",
         ),
     ],
 )

@@ -144,23 +144,22 @@ def _study_tails() -> list[str]:
 @pytest.mark.parametrize("x_h_mm", [57.0, 98.0])
 def test_steady_states_are_of_the_study_order(tail, x_h_mm) -> None:
     trim = model(tail, x_h_mm).trim
-    # study: theta 20-29 deg, V 0.7-0.9 m/s, f 13-14 Hz at 57 mm. The model reaches them for
-    # mid-size
-    # tails; its speed is more sensitive to tail size and position than the vehicle's (see
-    # docs/simulator.md), so the bounds here are the study's widened by the model's known spread.
-    assert 13.0 < math.degrees(trim.theta_rad) < 37.0
-    assert 0.45 < trim.airspeed_m_s < 1.1
-    assert 12.8 < trim.flapping_frequency_hz < 14.1
+    # study: theta 20-29 deg, V 0.7-0.9 m/s, f 13-14 Hz at 57 mm; 98 mm flies slower and flatter.
+    # The bounds widen the study's by its 2-sigma day-to-day scatter (~2 deg, 0.1 m/s, 0.2 Hz).
+    assert 18.0 < math.degrees(trim.theta_rad) < 31.0
+    assert 0.6 < trim.airspeed_m_s < 0.95
+    assert 12.8 < trim.flapping_frequency_hz < 14.2
 
 
 @pytest.mark.parametrize(
     "row", pd.read_csv(VALIDATION, comment="#").to_dict("records"), ids=lambda row: row["tail"]
 )
 def test_steady_states_near_the_measured_ones_at_57mm(row) -> None:
-    # tolerances: the model is calibrated to orders and trends, not fitted to these six points; its
-    # worst case (S6) is 7.7 deg and 0.23 m/s off (docs/simulator.md)
+    # tolerances: the model is calibrated to orders and trends, not fitted to these six points; the
+    # study's own linear fits miss them by up to 1.9 deg, 0.05 m/s, 0.34 Hz (Table 3), and the
+    # vehicle drifts between days; the model's worst cases are 3.3 deg (AR2), 0.064 m/s (AR4),
+    # 0.34 Hz (S4) (docs/simulator.md)
     trim = model(row["tail"][:-1], 57.0).trim
-    assert abs(math.degrees(trim.theta_rad) - row["theta_meas_deg"]) < 8.0
-    assert abs(trim.airspeed_m_s - row["v_meas_m_s"]) < 0.25
-    # frequency: the model's 13.0-13.5 Hz against the measured 13.05-13.77 Hz
-    assert abs(trim.flapping_frequency_hz - row["f_meas_hz"]) < 0.7
+    assert abs(math.degrees(trim.theta_rad) - row["theta_meas_deg"]) < 3.5
+    assert abs(trim.airspeed_m_s - row["v_meas_m_s"]) < 0.08
+    assert abs(trim.flapping_frequency_hz - row["f_meas_hz"]) < 0.4

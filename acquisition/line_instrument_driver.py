@@ -1,0 +1,44 @@
+"""What every line-protocol instrument driver shares: its connection, ``ID?`` on open, close, a safe state."""
+
+from __future__ import annotations
+
+from ornitail.acquisition.line_instrument_connection import (
+    DEFAULT_LINE_BAUD,
+    LineInstrumentConnection,
+)
+
+
+class LineInstrumentDriver:
+    """Base of the fan, strut and motor drivers (docs/instrument-protocols.md).
+
+    Parameters
+    ----------
+    port : str
+        Serial device or pty path.
+    name : str
+        Name used in every message about this instrument.
+    baud : int
+        Line speed, bit/s.
+    safe_state_command : str
+        Command that brings the instrument to rest (sent by :meth:`safe_state`).
+    """
+
+    def __init__(
+        self, port: str, *, name: str, baud: int = DEFAULT_LINE_BAUD, safe_state_command: str
+    ) -> None:
+        self.name = name
+        self.connection = LineInstrumentConnection(port, name=name, baud=baud)
+        self._safe_state_command = safe_state_command
+
+    def open(self) -> str:
+        """Open the port and return the controller's ``ID?`` reply."""
+        self.connection.open()
+        return self.connection.query("ID?")
+
+    def close(self) -> None:
+        """Close the port (does not bring the instrument to rest; call :meth:`safe_state` first)."""
+        self.connection.close()
+
+    def safe_state(self) -> None:
+        """Bring the instrument to rest (fan stopped, motor off, strut halted)."""
+        self.connection.command(self._safe_state_command)

@@ -1,0 +1,515 @@
+"""Stability derivatives of a configuration from all its tunnel sweep points together.
+
+The clamped vehicle's cycle-averaged loads X, Z (N) and M (N m, positive nose-down) are fitted as
+
+    L = L0 + Lu du + Lw dw + Lf df + (curvature along each sweep)
+
+by weighted least squares over every tailed measurement of the configuration, where ``du = u - u0``,
+``dw = w - w0`` are the body velocities relative to the steady state (``u = -V cos theta``,
+``w = -V sin theta``, docs/frames.md) and ``df = f - f0``. The pitch sweep at constant V turns the velocity
+vector (mostly ``dw``), the velocity sweep stretches it (mostly ``du``): together they separate the u- and
+w-derivatives. The intercept L0 is the steady-state load.
+
+Curvature: over a sweep of +-0.25 m/s the loads are visibly non-linear, and a straight line through the points
+gives the chord, not the derivative at the steady state. When a sweep has k >= 2 distinct offsets, the powers
+2..min(k, 3) of that sweep's own coordinate are fitted as nuisance terms: ``dV_along**p`` (velocity change along
+the steady-state stream direction) for the velocity sweep, ``dV_across**p`` (across it) for the pitch sweep and
+``df**p`` for the frequency sweep. With a symmetric sweep the even powers do not move the slopes; the cubes
+remove the chord bias. ``max_sweep_order=1`` gives the plain straight-line fit.
+
+Weights: the points' covariance is the cycle scatter of each point (``se**2`` on the diagonal) plus the noise of
+each wind-off tare, shared by every point corrected with that tare (``tare_se**2`` between them); the fit is
+generalised least squares with that covariance ``C`` (weighted least squares when every point has its own tare).
+Standard errors of the coefficients come from ``(A^T C^-1 A)^-1``; when the reduced chi-square exceeds 1 (scatter or lack of fit
+beyond what the point errors explain) they are multiplied by ``sqrt(chi2_red)`` and the fit says so.
+
+The clamped set-up holds pitch fixed during a record, so the pitch-rate derivatives Xq, Zq, Mq cannot be
+measured in it; the result states this.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ornitail.core.errors import UserInputError
+
+LOADS = (("X", "x_n", "N"), ("Z", "z_n", "N"), ("M", "m_n_m", "N m"))
+"""Load symbol, its column in the cycle-averaged table, its unit."""
+VARIABLES = (("u", "m/s"), ("w", "m/s"), ("f", "Hz"))
+"""Variable symbol and unit the derivatives are taken with respect to."""
+DERIVATIVE_NAMES = tuple(load + variable for load, _, _ in LOADS for variable, _ in VARIABLES)
+NOT_MEASURABLE_CLAMPED = ("Xq", "Zq", "Mq")
+NOT_MEASURABLE_STATEMENT = (
+    "Xq, Zq and Mq (derivatives with respect to pitch rate q) cannot be measured on the clamped balance: the "
+    "pitch is fixed during every record, so q = 0 throughout; take them from free flight."
+)
+FRAME_STATEMENT = (
+    "study body frame (docs/frames.md): x_b aft in forward flight, z_b nose to tail, M nose-down"
+)
+REFERENCE_POINT_STATEMENT = (
+    "the rig's tool-transform point (rig file [balance].tool_transform_mm_deg)"
+)
+_SWEEP_COORDINATES = {"velocity": "dV_along", "theta": "dV_across", "frequency": "df_hz"}
+
+
+def derivative_unit(load: str, variable: str) -> str:
+    """Unit of ``d load / d variable``: N/(m/s), N m/(m/s), N/Hz or N m/Hz."""
+    load_unit = dict((symbol, unit) for symbol, _, unit in LOADS)[load]
+    variable_unit = dict(VARIABLES)[variable]
+    return (
+        f"{load_unit}/({variable_unit})" if "/" in variable_unit else f"{load_unit}/{variable_unit}"
+    )
+
+
+def body_velocities(theta_rad: np.ndarray | float, v_m_s: np.ndarray | float) -> tuple:
+    """Body velocities ``u = -V cos theta`` and ``w = -V sin theta`` (m/s) in still-air steady flight."""
+    theta = np.asarray(theta_rad, dtype=float)
+    speed = np.asarray(v_m_s, dtype=float)
+    return -speed * np.cos(theta), -speed * np.sin(theta)
+
+
+@dataclass(frozen=True)
+class SteadyState:
+    """The steady state the derivatives are taken about: pitch (rad), speed (m/s), flapping frequency (Hz)."""
+
+    theta_rad: float
+    v_m_s: float
+    f_hz: float
+
+    @property
+    def u_m_s(self) -> float:
+        """Body velocity along x_b, m/s."""
+        return float(-self.v_m_s * math.cos(self.theta_rad))
+
+    @property
+    def w_m_s(self) -> float:
+        """Body velocity along z_b, m/s."""
+        return float(-self.v_m_s * math.sin(self.theta_rad))
+
+
+@dataclass(frozen=True)
+class LoadFitDiagnostics:
+    """How well one load's model fits.
+
+    Attributes
+    ----------
+    residuals : numpy.ndarray
+        Measured minus fitted load per point (N or N m).
+    normalised_residuals : numpy.ndarray
+        Residuals divided by the point's standard error.
+    leverage : numpy.ndarray
+        Diagonal of the weighted hat matrix per point (0..1; sums to the number of coefficients).
+    chi_square, degrees_of_freedom, reduced_chi_square : float, int, float
+        Weighted residual sum of squares, points minus coefficients, and their ratio (NaN without
+        degrees of freedom).
+    standard_error_inflation : float
+        Factor applied to the standard errors: ``sqrt(reduced_chi_square)`` when that exceeds 1, else 1.
+    """
+
+    residuals: np.ndarray
+    normalised_residuals: np.ndarray
+    leverage: np.ndarray
+    chi_square: float
+    degrees_of_freedom: int
+    reduced_chi_square: float
+    standard_error_inflation: float
+
+
+@dataclass
+class StabilityDerivatives:
+    """Fitted stability derivatives of one configuration (tunnel, clamped), body frame.
+
+    Fitted values are plain attributes: ``Xu, Xw, Xf, Zu, Zw, Zf, Mu, Mw, Mf`` (N/(m/s), N m/(m/s), N/Hz,
+    N m/Hz; NaN when the sweeps cannot give them), ``X0, Z0, M0`` the steady-state loads (N, N m) and
+    ``sigma`` the standard error of each by name (inflated where the fit says so).
+
+    Attributes
+    ----------
+    configuration : str
+        E.g. ``"S3 x_h=98mm"``.
+    steady_state : SteadyState
+        The point the derivatives are taken about.
+    sigma : dict
+        Standard error of every fitted value, by name.
+    diagnostics : dict
+        :class:`LoadFitDiagnostics` by load symbol ``"X"``, ``"Z"``, ``"M"``.
+    points : pandas.DataFrame
+        The fitted points: ``sweep``, ``theta_deg``, ``v_m_s``, ``f_set_hz``, ``du_m_s``, ``dw_m_s``, ``df_hz``.
+    condition_number : float
+        Condition number of the design's derivative columns (du, dw, df), each scaled to unit length.
+    variance_inflation : dict
+        Variance inflation factor of each estimable derivative column (1 = orthogonal to the others).
+    nuisance_terms : list of str
+        Curvature terms fitted alongside (e.g. ``"dV_along^2"``).
+    not_estimable : dict
+        Derivatives the sweeps cannot give (name -> reason), always including Xq, Zq, Mq.
+    frame, reference_point : str
+        Where the loads act and in which axes.
+    """
+
+    configuration: str
+    steady_state: SteadyState
+    sigma: dict[str, float]
+    diagnostics: dict[str, LoadFitDiagnostics]
+    points: pd.DataFrame
+    condition_number: float
+    variance_inflation: dict[str, float]
+    nuisance_terms: list[str]
+    not_estimable: dict[str, str]
+    frame: str = FRAME_STATEMENT
+    reference_point: str = REFERENCE_POINT_STATEMENT
+    X0: float = math.nan
+    Z0: float = math.nan
+    M0: float = math.nan
+    Xu: float = math.nan
+    Xw: float = math.nan
+    Xf: float = math.nan
+    Zu: float = math.nan
+    Zw: float = math.nan
+    Zf: float = math.nan
+    Mu: float = math.nan
+    Mw: float = math.nan
+    Mf: float = math.nan
+    statements: list[str] = field(default_factory=list)
+
+    def table(self) -> pd.DataFrame:
+        """One row per derivative (and steady-state load): value, sigma, unit, fit diagnostics."""
+        rows = []
+        for load, _, unit in LOADS:
+            diagnostics = self.diagnostics[load]
+            common = {
+                "reduced_chi_square": diagnostics.reduced_chi_square,
+                "degrees_of_freedom": diagnostics.degrees_of_freedom,
+                "sigma_inflation": diagnostics.standard_error_inflation,
+            }
+            rows.append(
+                {
+                    "name": f"{load}0",
+                    "value": getattr(self, f"{load}0"),
+                    "sigma": self.sigma[f"{load}0"],
+                    "unit": unit,
+                    "with_respect_to": "steady state",
+                    "variance_inflation": math.nan,
+                    **common,
+                }
+            )
+            for variable, _ in VARIABLES:
+                name = load + variable
+                rows.append(
+                    {
+                        "name": name,
+                        "value": getattr(self, name),
+                        "sigma": self.sigma.get(name, math.nan),
+                        "unit": derivative_unit(load, variable),
+                        "with_respect_to": variable,
+                        "variance_inflation": self.variance_inflation.get(variable, math.nan),
+                        **common,
+                    }
+                )
+        for name in NOT_MEASURABLE_CLAMPED:
+            rows.append(
+                {
+                    "name": name,
+                    "value": math.nan,
+                    "sigma": math.nan,
+                    "unit": derivative_unit(name[0], "w").replace("(m/s)", "(rad/s)"),
+                    "with_respect_to": "q",
+                    "variance_inflation": math.nan,
+                    "reduced_chi_square": math.nan,
+                    "degrees_of_freedom": 0,
+                    "sigma_inflation": math.nan,
+                }
+            )
+        frame = pd.DataFrame(rows)
+        frame.insert(0, "configuration", self.configuration)
+        frame["frame"] = "study body frame"
+        return frame
+
+    def to_json_dict(self) -> dict[str, Any]:
+        """Values, sigmas, units, steady state, diagnostics and statements, JSON-serialisable."""
+        derivatives = {}
+        for row in self.table().itertuples():
+            derivatives[row.name] = {"value": row.value, "sigma": row.sigma, "unit": row.unit}
+        return {
+            "configuration": self.configuration,
+            "frame": self.frame,
+            "reference_point": self.reference_point,
+            "steady_state": {
+                "theta_deg": math.degrees(self.steady_state.theta_rad),
+                "v_m_s": self.steady_state.v_m_s,
+                "f_hz": self.steady_state.f_hz,
+                "u_m_s": self.steady_state.u_m_s,
+                "w_m_s": self.steady_state.w_m_s,
+            },
+            "derivatives": derivatives,
+            "not_estimable": self.not_estimable,
+            "nuisance_terms": self.nuisance_terms,
+            "condition_number": self.condition_number,
+            "variance_inflation": self.variance_inflation,
+            "fit": {
+                load: {
+                    "reduced_chi_square": diagnostics.reduced_chi_square,
+                    "degrees_of_freedom": diagnostics.degrees_of_freedom,
+                    "sigma_inflation": diagnostics.standard_error_inflation,
+                    "max_abs_normalised_residual": float(
+                        np.max(np.abs(diagnostics.normalised_residuals))
+                    ),
+                    "max_leverage": float(np.max(diagnostics.leverage)),
+                }
+                for load, diagnostics in self.diagnostics.items()
+            },
+            "statements": self.statements,
+        }
+
+
+def steady_state_of(points: pd.DataFrame) -> SteadyState:
+    """The steady state of a configuration's points: the set values of its ``steady_state`` rows."""
+    steady = points[points["sweep"] == "steady_state"]
+    if steady.empty:
+        raise UserInputError("sweep table", "no steady-state point among the tailed measurements")
+    values = steady[["theta_deg", "v_m_s", "f_set_hz"]].round(9).drop_duplicates()
+    if len(values) > 1:
+        raise UserInputError("sweep table", "the steady-state points differ in their set values")
+    theta_deg, v_m_s, f_hz = values.iloc[0]
+    return SteadyState(math.radians(theta_deg), float(v_m_s), float(f_hz))
+
+
+def _sweep_coordinates(points: pd.DataFrame, steady: SteadyState) -> pd.DataFrame:
+    u, w = body_velocities(np.radians(points["theta_deg"].to_numpy()), points["v_m_s"].to_numpy())
+    du, dw = u - steady.u_m_s, w - steady.w_m_s
+    # Unit vector of the steady-state stream in body axes is -(cos theta0, sin theta0).
+    cos0, sin0 = math.cos(steady.theta_rad), math.sin(steady.theta_rad)
+    return pd.DataFrame(
+        {
+            "du_m_s": du,
+            "dw_m_s": dw,
+            "df_hz": points["f_set_hz"].to_numpy() - steady.f_hz,
+            "dV_along": -(du * cos0 + dw * sin0),
+            "dV_across": du * sin0 - dw * cos0,
+        },
+        index=points.index,
+    )
+
+
+def _nuisance_columns(
+    points: pd.DataFrame, coordinates: pd.DataFrame, max_sweep_order: int
+) -> dict[str, np.ndarray]:
+    columns = {}
+    for sweep, coordinate in _SWEEP_COORDINATES.items():
+        offsets = coordinates.loc[points["sweep"] == sweep, coordinate].round(9).unique()
+        for power in range(2, min(len(offsets), max_sweep_order) + 1):
+            columns[f"{coordinate}^{power}"] = coordinates[coordinate].to_numpy() ** power
+    return columns
+
+
+def _estimable_variables(coordinates: pd.DataFrame) -> tuple[list[str], dict[str, str]]:
+    """Which of u, w, f the points' spread can separate, and why the others cannot be."""
+    velocity = coordinates[["du_m_s", "dw_m_s"]].to_numpy()
+    velocity_rank = np.linalg.matrix_rank(velocity, tol=1e-9) if len(velocity) else 0
+    reasons = {}
+    variables = []
+    if velocity_rank == 2:
+        variables += ["u", "w"]
+    else:
+        reason = (
+            "the points do not vary the body velocity"
+            if velocity_rank == 0
+            else "the points vary the body velocity in one direction only; a pitch sweep and a velocity "
+            "sweep together are needed to separate u and w"
+        )
+        reasons.update({"u": reason, "w": reason})
+    if np.ptp(coordinates["df_hz"].to_numpy()) > 1e-9:
+        variables.append("f")
+    else:
+        reasons["f"] = "the points do not vary the flapping frequency (no frequency sweep)"
+    return variables, reasons
+
+
+def _variance_inflation(design: np.ndarray, names: list[str]) -> dict[str, float]:
+    if len(names) < 2:
+        return {name: 1.0 for name in names}
+    centred = design - design.mean(axis=0)
+    correlation = np.corrcoef(centred, rowvar=False)
+    return dict(zip(names, np.diag(np.linalg.inv(correlation)).tolist(), strict=True))
+
+
+def point_covariance(
+    standard_errors: np.ndarray, tare_standard_errors: np.ndarray, tare_ids: np.ndarray | None
+) -> np.ndarray:
+    """Covariance of the points' loads: cycle scatter per point plus the error of each shared tare.
+
+    Points corrected with the same tare (same ``tare_ids`` entry) share its error, so their tare parts are
+    fully correlated; without ``tare_ids`` every point is taken to have its own tare.
+    """
+    tare = np.asarray(tare_standard_errors, dtype=float)
+    if tare_ids is None:
+        shared = np.eye(len(tare), dtype=bool)
+    else:
+        ids = np.asarray(tare_ids)
+        shared = ids[:, None] == ids[None, :]
+    return np.diag(np.asarray(standard_errors, dtype=float) ** 2) + shared * np.outer(tare, tare)
+
+
+def _weighted_fit(
+    design: np.ndarray, values: np.ndarray, covariance: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, LoadFitDiagnostics]:
+    """Generalised least squares: coefficients, their (inflated) standard errors and diagnostics."""
+    cholesky = np.linalg.cholesky(covariance)
+    weighted_design = np.linalg.solve(cholesky, design)
+    weighted_values = np.linalg.solve(cholesky, values)
+    normal_inverse = np.linalg.inv(weighted_design.T @ weighted_design)
+    coefficients = normal_inverse @ weighted_design.T @ weighted_values
+    residuals = values - design @ coefficients
+    whitened = weighted_values - weighted_design @ coefficients
+    leverage = np.einsum("ij,jk,ik->i", weighted_design, normal_inverse, weighted_design)
+    chi_square = float(whitened @ whitened)
+    degrees_of_freedom = len(values) - design.shape[1]
+    reduced = chi_square / degrees_of_freedom if degrees_of_freedom > 0 else math.nan
+    inflation = math.sqrt(reduced) if reduced > 1.0 else 1.0
+    sigma = np.sqrt(np.diag(normal_inverse)) * inflation
+    return (
+        coefficients,
+        sigma,
+        LoadFitDiagnostics(
+            residuals=residuals,
+            normalised_residuals=residuals / np.sqrt(np.diag(covariance)),
+            leverage=leverage,
+            chi_square=chi_square,
+            degrees_of_freedom=degrees_of_freedom,
+            reduced_chi_square=reduced,
+            standard_error_inflation=inflation,
+        ),
+    )
+
+
+def fit_stability_derivatives(
+    table: pd.DataFrame, configuration: str | None = None, max_sweep_order: int = 3
+) -> StabilityDerivatives:
+    """Fit the u-, w- and f-derivatives of X, Z and M to the tailed points of one configuration.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        Cycle-averaged points as :func:`~ornitail.balance.sweep_table.cycle_averaged_table` makes them (needs
+        ``sweep``, ``tailed``, ``theta_deg``, ``v_m_s``, ``f_set_hz``, ``x_n``, ``z_n``, ``m_n_m`` and their
+        ``_se`` and ``_tare_se``, optionally ``tare_id``); only tailed rows are used. Points sharing a
+        ``tare_id`` share that tare's error (generalised least squares with that covariance).
+    configuration : str, optional
+        Name for the output; default from the table's ``tail_id`` and ``x_h_mm``.
+    max_sweep_order : int
+        Highest power of a sweep's coordinate fitted (1: straight lines; 3: the default, see module notes).
+
+    Raises
+    ------
+    UserInputError
+        If there are no tailed points, no steady state, a point error is not positive and finite, or fewer
+        points than coefficients.
+    """
+    if max_sweep_order < 1:
+        raise UserInputError("max_sweep_order", f"must be at least 1, got {max_sweep_order}")
+    points = table[table["tailed"].astype(bool)].reset_index(drop=True)
+    if points.empty:
+        raise UserInputError("sweep table", "no tailed measurements to fit derivatives to")
+    configuration = configuration or _configuration_name(points)
+    steady = steady_state_of(points)
+    coordinates = _sweep_coordinates(points, steady)
+    variables, not_estimable = _estimable_variables(coordinates)
+    variable_columns = {"u": "du_m_s", "w": "dw_m_s", "f": "df_hz"}
+    derivative_design = coordinates[[variable_columns[v] for v in variables]].to_numpy()
+    nuisance = _nuisance_columns(points, coordinates, max_sweep_order)
+    design = np.column_stack([np.ones(len(points)), derivative_design, *nuisance.values()])
+    if len(points) < design.shape[1]:
+        raise UserInputError(
+            "sweep table",
+            f"{len(points)} tailed points cannot fix {design.shape[1]} coefficients; measure more points",
+        )
+    scaled = derivative_design / np.linalg.norm(derivative_design, axis=0)
+    condition_number = float(np.linalg.cond(scaled)) if len(variables) else math.nan
+    result = StabilityDerivatives(
+        configuration=configuration,
+        steady_state=steady,
+        sigma={},
+        diagnostics={},
+        points=pd.concat(
+            [points[["sweep", "theta_deg", "v_m_s", "f_set_hz"]], coordinates], axis=1
+        ),
+        condition_number=condition_number,
+        variance_inflation=_variance_inflation(derivative_design, variables),
+        nuisance_terms=list(nuisance),
+        not_estimable={
+            **{load + v: reason for v, reason in not_estimable.items() for load, _, _ in LOADS},
+            **{name: NOT_MEASURABLE_STATEMENT for name in NOT_MEASURABLE_CLAMPED},
+        },
+    )
+    tare_ids = points["tare_id"].to_numpy() if "tare_id" in points else None
+    for load, column, _ in LOADS:
+        values = points[column].to_numpy(dtype=float)
+        errors = points[f"{column}_se"].to_numpy(dtype=float)
+        tare_errors = points[f"{column}_tare_se"].to_numpy(dtype=float)
+        if not np.all(np.isfinite(values)) or not np.all(
+            np.isfinite(errors) & (errors > 0) & np.isfinite(tare_errors) & (tare_errors >= 0)
+        ):
+            raise UserInputError(
+                f"sweep table: {column}", "values and standard errors must be finite, errors > 0"
+            )
+        covariance = point_covariance(errors, tare_errors, tare_ids)
+        coefficients, sigma, diagnostics = _weighted_fit(design, values, covariance)
+        names = [f"{load}0"] + [load + variable for variable in variables]
+        for index, name in enumerate(names):
+            setattr(result, name, float(coefficients[index]))
+            result.sigma[name] = float(sigma[index])
+        result.diagnostics[load] = diagnostics
+    result.statements = _statements(result)
+    return result
+
+
+def _configuration_name(points: pd.DataFrame) -> str:
+    if "tail_id" not in points or "x_h_mm" not in points:
+        return "unnamed configuration"
+    tail = str(points["tail_id"].iloc[0])
+    return f"{tail} x_h={float(points['x_h_mm'].iloc[0]):.0f}mm"
+
+
+def _statements(result: StabilityDerivatives) -> list[str]:
+    lines = [
+        f"Derivatives of {result.configuration}, {result.frame}, about {result.reference_point}, at "
+        f"theta0 = {math.degrees(result.steady_state.theta_rad):.2f} deg, V0 = {result.steady_state.v_m_s:.3f} "
+        f"m/s, f0 = {result.steady_state.f_hz:.2f} Hz (u0 = {result.steady_state.u_m_s:+.3f} m/s, "
+        f"w0 = {result.steady_state.w_m_s:+.3f} m/s).",
+        NOT_MEASURABLE_STATEMENT,
+    ]
+    for load, diagnostics in result.diagnostics.items():
+        if diagnostics.standard_error_inflation > 1.0:
+            lines.append(
+                f"{load}: reduced chi-square {diagnostics.reduced_chi_square:.2f} > 1 on "
+                f"{diagnostics.degrees_of_freedom} degrees of freedom: the points scatter more than their "
+                f"standard errors say; sigmas inflated by sqrt(chi2_red) = "
+                f"{diagnostics.standard_error_inflation:.2f}."
+            )
+    estimable_missing = sorted(
+        {name for name in result.not_estimable if name not in NOT_MEASURABLE_CLAMPED}
+    )
+    if estimable_missing:
+        reasons = sorted({result.not_estimable[name] for name in estimable_missing})
+        lines.append(
+            f"Not estimable from these sweeps: {', '.join(estimable_missing)} ({'; '.join(reasons)})."
+        )
+    high_vif = {name: value for name, value in result.variance_inflation.items() if value > 10}
+    if high_vif:
+        lines.append(
+            "Collinear sweep design: variance inflation "
+            + ", ".join(f"{name} {value:.0f}" for name, value in high_vif.items())
+            + " (> 10): the sweeps barely separate these variables."
+        )
+    if result.nuisance_terms:
+        lines.append(
+            "Curvature along the sweeps fitted as nuisance terms ("
+            + ", ".join(result.nuisance_terms)
+            + "), so the derivatives are local slopes at the steady state, not chords."
+        )
+    return lines
