@@ -20,8 +20,9 @@ remove the chord bias. ``max_sweep_order=1`` gives the plain straight-line fit.
 Weights: the points' covariance is the cycle scatter of each point (``se**2`` on the diagonal) plus the noise of
 each wind-off tare, shared by every point corrected with that tare (``tare_se**2`` between them); the fit is
 generalised least squares with that covariance ``C`` (weighted least squares when every point has its own tare).
-Standard errors of the coefficients come from ``(A^T C^-1 A)^-1``; when the reduced chi-square exceeds 1 (scatter or lack of fit
-beyond what the point errors explain) they are multiplied by ``sqrt(chi2_red)`` and the fit says so.
+Standard errors of the coefficients come from ``(A^T C^-1 A)^-1``; when the reduced chi-square exceeds 1
+(scatter or lack of fit beyond what the point errors explain) they are multiplied by ``sqrt(chi2_red)`` and
+the fit says so.
 
 The clamped set-up holds pitch fixed during a record, so the pitch-rate derivatives Xq, Zq, Mq cannot be
 measured in it; the result states this.
@@ -54,6 +55,7 @@ FRAME_STATEMENT = (
 REFERENCE_POINT_STATEMENT = (
     "the rig's tool-transform point (rig file [balance].tool_transform_mm_deg)"
 )
+_VARIABLE_COLUMNS = {"u": "du_m_s", "w": "dw_m_s", "f": "df_hz"}
 _SWEEP_COORDINATES = {"velocity": "dV_along", "theta": "dV_across", "frequency": "df_hz"}
 
 
@@ -146,6 +148,10 @@ class StabilityDerivatives:
         Variance inflation factor of each estimable derivative column (1 = orthogonal to the others).
     nuisance_terms : list of str
         Curvature terms fitted alongside (e.g. ``"dV_along^2"``).
+    variables : list of str
+        The estimable variables among ``u``, ``w``, ``f``, in coefficient order.
+    coefficients : dict
+        Every fitted coefficient by load: intercept, derivatives (``variables`` order), then nuisance terms.
     not_estimable : dict
         Derivatives the sweeps cannot give (name -> reason), always including Xq, Zq, Mq.
     frame, reference_point : str
@@ -176,6 +182,25 @@ class StabilityDerivatives:
     Mw: float = math.nan
     Mf: float = math.nan
     statements: list[str] = field(default_factory=list)
+    variables: list[str] = field(default_factory=list)
+    coefficients: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def predict(
+        self, theta_deg: np.ndarray, v_m_s: np.ndarray, f_hz: np.ndarray, linear_only: bool = False
+    ) -> dict[str, np.ndarray]:
+        """Fitted X, Z (N) and M (N m) at set points; ``linear_only``: the tangent at the steady state."""
+        theta, speed, frequency = np.broadcast_arrays(
+            np.asarray(theta_deg, float), np.asarray(v_m_s, float), np.asarray(f_hz, float)
+        )
+        points = pd.DataFrame(
+            {"theta_deg": theta.ravel(), "v_m_s": speed.ravel(), "f_set_hz": frequency.ravel()}
+        )
+        coordinates = _sweep_coordinates(points, self.steady_state)
+        design = _design(coordinates, self.variables, [] if linear_only else self.nuisance_terms)
+        return {
+            load: design @ coefficients[: design.shape[1]]
+            for load, coefficients in self.coefficients.items()
+        }
 
     def table(self) -> pd.DataFrame:
         """One row per derivative (and steady-state load): value, sigma, unit, fit diagnostics."""
@@ -296,15 +321,28 @@ def _sweep_coordinates(points: pd.DataFrame, steady: SteadyState) -> pd.DataFram
     )
 
 
-def _nuisance_columns(
+def _nuisance_terms(
     points: pd.DataFrame, coordinates: pd.DataFrame, max_sweep_order: int
-) -> dict[str, np.ndarray]:
-    columns = {}
+) -> list[str]:
+    terms = []
     for sweep, coordinate in _SWEEP_COORDINATES.items():
         offsets = coordinates.loc[points["sweep"] == sweep, coordinate].round(9).unique()
-        for power in range(2, min(len(offsets), max_sweep_order) + 1):
-            columns[f"{coordinate}^{power}"] = coordinates[coordinate].to_numpy() ** power
-    return columns
+        terms += [
+            f"{coordinate}^{power}" for power in range(2, min(len(offsets), max_sweep_order) + 1)
+        ]
+    return terms
+
+
+def _design(
+    coordinates: pd.DataFrame, variables: list[str], nuisance_terms: list[str]
+) -> np.ndarray:
+    """Columns: 1, the estimable derivative variables, then the nuisance powers."""
+    columns = [np.ones(len(coordinates))]
+    columns += [coordinates[_VARIABLE_COLUMNS[variable]].to_numpy() for variable in variables]
+    for term in nuisance_terms:
+        coordinate, power = term.split("^")
+        columns.append(coordinates[coordinate].to_numpy() ** int(power))
+    return np.column_stack(columns)
 
 
 def _estimable_variables(coordinates: pd.DataFrame) -> tuple[list[str], dict[str, str]]:
@@ -419,10 +457,9 @@ def fit_stability_derivatives(
     steady = steady_state_of(points)
     coordinates = _sweep_coordinates(points, steady)
     variables, not_estimable = _estimable_variables(coordinates)
-    variable_columns = {"u": "du_m_s", "w": "dw_m_s", "f": "df_hz"}
-    derivative_design = coordinates[[variable_columns[v] for v in variables]].to_numpy()
-    nuisance = _nuisance_columns(points, coordinates, max_sweep_order)
-    design = np.column_stack([np.ones(len(points)), derivative_design, *nuisance.values()])
+    derivative_design = coordinates[[_VARIABLE_COLUMNS[v] for v in variables]].to_numpy()
+    nuisance = _nuisance_terms(points, coordinates, max_sweep_order)
+    design = _design(coordinates, variables, nuisance)
     if len(points) < design.shape[1]:
         raise UserInputError(
             "sweep table",
@@ -440,7 +477,8 @@ def fit_stability_derivatives(
         ),
         condition_number=condition_number,
         variance_inflation=_variance_inflation(derivative_design, variables),
-        nuisance_terms=list(nuisance),
+        nuisance_terms=nuisance,
+        variables=variables,
         not_estimable={
             **{load + v: reason for v, reason in not_estimable.items() for load, _, _ in LOADS},
             **{name: NOT_MEASURABLE_STATEMENT for name in NOT_MEASURABLE_CLAMPED},
@@ -459,6 +497,7 @@ def fit_stability_derivatives(
             )
         covariance = point_covariance(errors, tare_errors, tare_ids)
         coefficients, sigma, diagnostics = _weighted_fit(design, values, covariance)
+        result.coefficients[load] = coefficients
         names = [f"{load}0"] + [load + variable for variable in variables]
         for index, name in enumerate(names):
             setattr(result, name, float(coefficients[index]))

@@ -146,7 +146,9 @@ def standard_error_of_cycle_mean(per_cycle: np.ndarray, adjacent: np.ndarray) ->
     count = len(per_cycle)
     deviations = per_cycle - per_cycle.mean(axis=0)
     variance = (deviations**2).sum(axis=0) / (count - 1)
-    lag_one = (deviations[:-1] * deviations[1:])[np.asarray(adjacent, dtype=bool)].sum(axis=0) / count
+    lag_one = (deviations[:-1] * deviations[1:])[np.asarray(adjacent, dtype=bool)].sum(
+        axis=0
+    ) / count
     long_run_variance = np.maximum(variance + 2.0 * lag_one, variance / count)
     return np.sqrt(long_run_variance / count)
 

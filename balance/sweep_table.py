@@ -9,7 +9,7 @@ runs of the sweep (a resumed sweep may have its tare in an earlier run).
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -192,7 +192,14 @@ def _frequency_check_record(hall_frequency_hz: float, motor_rpm: object) -> dict
 
 
 def cycle_averaged_table(run_directories: Iterable[Path | str]) -> pd.DataFrame:
-    """One row per measured set point of the given runs, in recording order.
+    """One row per measured set point of the given runs, in recording order (see :func:`table_of_points`)."""
+    return table_of_points(measured_set_points(run_directories))
+
+
+def table_of_points(
+    points: list[MeasuredSetPoint], on_point: Callable[[int, int], None] | None = None
+) -> pd.DataFrame:
+    """One row per measured set point, in the order given.
 
     Columns: ``run_id``, ``tail_id``, ``x_h_mm``, ``plan_point_index``, ``sweep``, ``tailed``, ``repeat``,
     ``theta_deg``, ``v_m_s``, ``f_set_hz``, ``tare_id`` (``<run id>#<plan point index>`` of the tare used),
@@ -203,14 +210,15 @@ def cycle_averaged_table(run_directories: Iterable[Path | str]) -> pd.DataFrame:
     (standard error of the mean over cycles) and ``_tare_se`` (standard error of the subtracted tare). Loads are
     in N and N m, body frame, about the rig's reference point.
 
+    ``on_point(done, total)`` is called after each point (progress display).
+
     Raises
     ------
     UserInputError
-        If a measurement has no earlier tare at its pitch and tail state, a calibration file changed, or a
-        record holds too few flapping cycles.
+        If a record holds too few flapping cycles.
     """
     rows = []
-    for point in measured_set_points(run_directories):
+    for done, point in enumerate(points, start=1):
         row = point.row
         loads = point.loads()
         configuration = point.recording.metadata.get("configuration", {})
@@ -232,6 +240,8 @@ def cycle_averaged_table(run_directories: Iterable[Path | str]) -> pd.DataFrame:
                 **_frequency_check_record(loads.flapping_frequency_hz, row.get("motor_rpm_mean")),
             }
         )
+        if on_point is not None:
+            on_point(done, len(points))
     return pd.DataFrame(rows)
 
 

@@ -1,0 +1,103 @@
+"""``ornitail process``: cycle-averaged table, tail contribution, derivatives and figures from recorded runs."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import click
+
+from ornitail.acquisition.catalog import default_data_root
+from ornitail.balance.process_runs import newest_sweep_chain, process_runs
+from ornitail.core.errors import UserInputError
+from ornitail.core.output import emit, json_option
+
+PROGRESS_DELAY_S = 1.0
+"""The progress bar appears only once processing has taken this long."""
+
+
+class _DelayedProgress:
+    """A click progress bar on stderr that shows itself only after :data:`PROGRESS_DELAY_S`."""
+
+    def __init__(self) -> None:
+        self.started_s = time.monotonic()
+        self.bar: Any = None
+
+    def __call__(self, done: int, total: int) -> None:
+        if self.bar is None:
+            if time.monotonic() - self.started_s < PROGRESS_DELAY_S:
+                return
+            self.bar = click.progressbar(
+                length=total, label="processing set points", file=sys.stderr, show_pos=True
+            )
+            self.bar.__enter__()
+        self.bar.update(done - self.bar.pos)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.__exit__(None, None, None)
+
+
+def _render(result: dict[str, Any]) -> str:
+    lines = [f"cycle-averaged table: {result['table_csv']}"]
+    for configuration in result["configurations"]:
+        lines.append("")
+        lines.append(f"== {configuration['configuration']} ==")
+        derivatives = configuration.get("derivatives")
+        if derivatives:
+            lines += derivatives["statements"][:1]
+            lines.append(f"{'':6s}{'value':>14s}{'sigma':>12s}  unit")
+            for name, entry in derivatives["derivatives"].items():
+                if entry["value"] is None or entry["value"] != entry["value"]:
+                    continue
+                lines.append(
+                    f"{name:6s}{entry['value']:>+14.6g}{entry['sigma']:>12.2g}  {entry['unit']}"
+                )
+            lines += derivatives["statements"][1:]
+        lines += configuration.get("tail_statements", [])
+    lines.append("")
+    lines += [f"wrote {path}" for path in result["written"]]
+    return "\n".join(lines)
+
+
+@click.command("process")
+@click.argument("runs", nargs=-1, type=click.Path(path_type=Path))
+@click.option(
+    "--plan",
+    "plan_name",
+    default=None,
+    help="Process the newest sweep (chain of runs) of the plan with this name in the catalog.",
+)
+@click.option(
+    "--data-root",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Where runs and the catalog live, for --plan [default: $ORNITAIL_DATA or ./ornitail-data].",
+)
+@click.option(
+    "--out",
+    "out",
+    type=click.Path(path_type=Path),
+    required=True,
+    help="Folder for the tables (CSV, JSON) and figures (PNG, PDF).",
+)
+@json_option
+def process_command(
+    runs: tuple[Path, ...], plan_name: str | None, data_root: Path | None, out: Path, as_json: bool
+) -> None:
+    """Cycle-average recorded runs; write tail contribution, stability derivatives and figures."""
+    if runs and plan_name:
+        raise UserInputError("--plan", "give run directories or --plan, not both")
+    run_directories = (
+        newest_sweep_chain(data_root or default_data_root(), plan_name) if plan_name else list(runs)
+    )
+    progress = _DelayedProgress()
+    try:
+        result = process_runs(run_directories, out, on_progress=progress)
+    finally:
+        progress.close()
+    for warning in result["warnings"]:
+        click.echo(warning, err=True)
+    emit(result, as_json, _render)

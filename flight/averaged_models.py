@@ -1,0 +1,137 @@
+"""The mathematics of combining per-manoeuvre estimates (no estimator needed here).
+
+- mean of parameters, with the covariance of the mean from the spread across manoeuvres;
+- covariance-weighted mean (minimum-covariance combination)
+  ``theta = P sum_i P_i^-1 theta_i`` with ``P = (sum_i P_i^-1)^-1``, and the chi-square statistic
+  ``sum_i (theta_i - theta)^T P_i^-1 (theta_i - theta)`` with ``(n - 1) p`` degrees of freedom
+  testing whether the manoeuvres share one parameter vector (for two models it equals
+  ``(theta_1 - theta_2)^T (P_1 + P_2)^-1 (theta_1 - theta_2)``, the test of MATLAB's ``merge``);
+- time-averaged response: manoeuvres aligned on their input start and averaged sample by sample.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from scipy.stats import chi2
+
+from ornitail.core.errors import UserInputError
+from ornitail.flight.manoeuvres import Manoeuvre
+
+MERGE_SIGNIFICANCE = 0.05
+
+
+@dataclass(frozen=True)
+class CombinedEstimate:
+    """A combined parameter vector and its covariance (parameter order of the inputs)."""
+
+    values: np.ndarray
+    covariance: np.ndarray
+
+    @property
+    def sigmas(self) -> np.ndarray:
+        return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
+
+
+@dataclass(frozen=True)
+class WeightedMerge(CombinedEstimate):
+    """Covariance-weighted mean with the chi-square test of merging."""
+
+    chi_square: float = float("nan")
+    degrees_of_freedom: int = 0
+    p_value: float = float("nan")
+
+    @property
+    def merge_justified(self) -> bool:
+        """True when the manoeuvres' differences are explained by their covariances (p > 5 %)."""
+        return bool(self.p_value > MERGE_SIGNIFICANCE)
+
+
+def mean_of_parameters(values: np.ndarray) -> CombinedEstimate:
+    """Plain mean over manoeuvres (rows) and the covariance of that mean (spread / n)."""
+    values = np.atleast_2d(np.asarray(values, dtype=float))
+    count = values.shape[0]
+    if count < 2:
+        raise UserInputError("manoeuvres", "averaging needs at least 2 models")
+    covariance = np.atleast_2d(np.cov(values, rowvar=False)) / count
+    return CombinedEstimate(values.mean(axis=0), covariance)
+
+
+def covariance_weighted_mean(
+    values: np.ndarray, covariances: Sequence[np.ndarray]
+) -> WeightedMerge:
+    """Minimum-covariance combination of ``n`` estimates (rows of ``values``) and its test.
+
+    Parameters
+    ----------
+    values : ndarray, shape (n, p)
+    covariances : n arrays of shape (p, p), each symmetric positive definite
+    """
+    values = np.atleast_2d(np.asarray(values, dtype=float))
+    count, size = values.shape
+    if count < 2 or len(covariances) != count:
+        raise UserInputError("manoeuvres", "merging needs at least 2 models with covariances")
+    informations = []
+    for index, covariance in enumerate(covariances):
+        covariance = np.asarray(covariance, dtype=float)
+        try:
+            informations.append(np.linalg.inv(covariance))
+        except np.linalg.LinAlgError as error:
+            raise UserInputError(
+                f"model {index + 1}", "parameter covariance is singular; cannot weight it"
+            ) from error
+    information_sum = np.sum(informations, axis=0)
+    merged_covariance = np.linalg.inv(information_sum)
+    weighted_sum = np.sum(
+        [information @ value for information, value in zip(informations, values, strict=True)],
+        axis=0,
+    )
+    merged = merged_covariance @ weighted_sum
+    chi_square = float(
+        sum(
+            (value - merged) @ information @ (value - merged)
+            for information, value in zip(informations, values, strict=True)
+        )
+    )
+    degrees = (count - 1) * size
+    return WeightedMerge(
+        values=merged,
+        covariance=0.5 * (merged_covariance + merged_covariance.T),
+        chi_square=chi_square,
+        degrees_of_freedom=degrees,
+        p_value=float(chi2.sf(chi_square, degrees)),
+    )
+
+
+def time_averaged_response(manoeuvres: Sequence[Manoeuvre]) -> pd.DataFrame:
+    """Manoeuvres aligned on their input start and averaged sample by sample.
+
+    All manoeuvres must share the sample rate. The result is as long as the shortest span before
+    and after the input; its ``time_s`` starts at 0 with the input at the common run-in.
+    """
+    if len(manoeuvres) < 2:
+        raise UserInputError("manoeuvres", "a time-averaged response needs at least 2 manoeuvres")
+    intervals = [float(np.median(np.diff(m.deviations["time_s"]))) for m in manoeuvres]
+    if max(intervals) - min(intervals) > 1e-6 * min(intervals):
+        raise UserInputError(
+            "manoeuvres", "time-averaging needs one sample rate for all logs of a configuration"
+        )
+    interval = intervals[0]
+    input_indices = [int(round(m.input_start_s / interval)) for m in manoeuvres]
+    before = min(input_indices)
+    after = min(
+        len(m.deviations) - index for m, index in zip(manoeuvres, input_indices, strict=True)
+    )
+    columns = [column for column in manoeuvres[0].deviations.columns if column != "time_s"]
+    stack = np.stack(
+        [
+            m.deviations[columns].to_numpy(float)[index - before : index + after]
+            for m, index in zip(manoeuvres, input_indices, strict=True)
+        ]
+    )
+    averaged = pd.DataFrame(stack.mean(axis=0), columns=columns)
+    averaged.insert(0, "time_s", np.arange(before + after) * interval)
+    return averaged

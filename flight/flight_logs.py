@@ -1,0 +1,120 @@
+"""Reading flight logs: CSV, Parquet and MATLAB .mat files into a pandas DataFrame.
+
+A .mat log holds either one variable per column (equal-length vectors) or, as NASA SIDPAC records
+do, a matrix ``fdata`` (samples x channels) with channel labels ``varlab`` such as
+``'* alpha      (deg)     '``. Labels become column names ``<name>_<unit>`` in lower case with
+spaces, ``/`` and ``-`` turned into ``_`` (``alpha_deg``, ``q_deg_sec``, ``qbar_lbf_ft2``);
+unlabelled channels become ``ch<number>`` (1-based), a repeated name gets ``_b``, ``_c``...
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import scipy.io
+
+from ornitail.core.errors import UserInputError
+
+LOG_SUFFIXES = (".csv", ".parquet", ".pq", ".mat")
+_LABEL_PATTERN = re.compile(r"^\*?\s*(?P<name>[^()]*?)\s*(\((?P<unit>[^)]*)\))?\s*$")
+
+
+def read_flight_log(path: str | Path) -> pd.DataFrame:
+    """Read a flight log by its suffix (.csv, .parquet/.pq, .mat); all columns numeric.
+
+    Raises
+    ------
+    UserInputError
+        If the file is missing, of an unknown kind, unreadable, or has non-numeric columns.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise UserInputError(str(path), "flight log not found")
+    suffix = path.suffix.lower()
+    if suffix == ".csv":
+        try:
+            data = pd.read_csv(path)
+        except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as error:
+            raise UserInputError(str(path), f"not a readable CSV file: {error}") from None
+    elif suffix in (".parquet", ".pq"):
+        data = _read_parquet(path)
+    elif suffix == ".mat":
+        data = _read_mat(path)
+    else:
+        raise UserInputError(
+            str(path), f"unknown log type {suffix!r} (expected {', '.join(LOG_SUFFIXES)})"
+        )
+    non_numeric = [
+        str(name) for name in data.columns if not pd.api.types.is_numeric_dtype(data[name])
+    ]
+    if non_numeric:
+        raise UserInputError(f"{path}: column {non_numeric[0]}", "is not numeric")
+    if data.empty:
+        raise UserInputError(str(path), "the log has no samples")
+    return data
+
+
+def _read_parquet(path: Path) -> pd.DataFrame:
+    try:
+        return pd.read_parquet(path)
+    except ImportError:
+        raise UserInputError(
+            str(path), "reading Parquet needs the pyarrow package (pip install pyarrow)"
+        ) from None
+    except (OSError, ValueError) as error:
+        raise UserInputError(str(path), f"not a readable Parquet file: {error}") from None
+
+
+def _read_mat(path: Path) -> pd.DataFrame:
+    try:
+        contents = scipy.io.loadmat(path)
+    except (ValueError, OSError, NotImplementedError) as error:
+        raise UserInputError(
+            str(path), f"not a readable MATLAB file (v4-v7.2): {error}"
+        ) from None
+    if "fdata" in contents:
+        matrix = np.asarray(contents["fdata"], dtype=float)
+        if matrix.ndim != 2:
+            raise UserInputError(f"{path}: fdata", "must be a matrix (samples x channels)")
+        labels = [str(label) for label in np.ravel(contents.get("varlab", []))]
+        return pd.DataFrame(matrix, columns=column_names_from_labels(labels, matrix.shape[1]))
+    vectors = {
+        name: np.ravel(value)
+        for name, value in contents.items()
+        if not name.startswith("__")
+        and isinstance(value, np.ndarray)
+        and np.issubdtype(value.dtype, np.number)
+        and min(value.shape, default=0) == 1
+        and value.size > 1
+    }
+    if not vectors:
+        raise UserInputError(str(path), "no fdata matrix and no numeric vectors in the file")
+    length = max(len(vector) for vector in vectors.values())
+    return pd.DataFrame(
+        {name: vector for name, vector in vectors.items() if len(vector) == length}
+    )
+
+
+def column_names_from_labels(labels: Sequence[str], count: int) -> list[str]:
+    """Column names for ``count`` channels from SIDPAC-style labels (see the module docstring)."""
+    names = []
+    for index in range(count):
+        label = labels[index] if index < len(labels) else ""
+        match = _LABEL_PATTERN.match(label.strip())
+        name = match.group("name").strip() if match else ""
+        unit = (match.group("unit") or "").strip() if match else ""
+        if not name:
+            names.append(f"ch{index + 1}")
+            continue
+        text = f"{name}_{unit}" if unit else name
+        names.append(re.sub(r"[\s/\-]+", "_", text).lower())
+    seen: dict[str, int] = {}
+    unique = []
+    for name in names:
+        seen[name] = seen.get(name, 0) + 1
+        unique.append(name if seen[name] == 1 else f"{name}_{chr(ord('a') + seen[name] - 1)}")
+    return unique

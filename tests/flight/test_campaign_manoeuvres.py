@@ -1,0 +1,144 @@
+"""Manoeuvre cutting, elevator glitch removal and the zero-phase filter of flight/manoeuvres.py."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from ornitail.core.errors import UserInputError
+from ornitail.flight.manoeuvres import (
+    REQUIRED_LOG_COLUMNS,
+    cut_manoeuvre,
+    cut_manoeuvres,
+    lowpass_zero_phase,
+    prepare_log,
+    remove_elevator_glitches,
+)
+from ornitail.sim.configuration import study_configuration
+from ornitail.sim.free_flight import FlightPlan, simulate_flight
+
+PLAN = FlightPlan(duration_s=24.0)  # three 8 s manoeuvre periods, each ending with a turn
+
+
+@pytest.fixture(scope="module")
+def simulated_log() -> pd.DataFrame:
+    return simulate_flight(study_configuration("S3", 98.0), plan=PLAN, seed=3)
+
+
+def test_cutting_finds_every_doublet_with_run_in_and_turn_end(simulated_log):
+    manoeuvres = cut_manoeuvres(simulated_log, "sim.csv")
+    doublets_flown = int(round(PLAN.duration_s / PLAN.manoeuvre_period_s))
+    assert len(manoeuvres) == doublets_flown
+    time = simulated_log["time_s"].to_numpy()
+    command = simulated_log["elevator_cmd"].to_numpy()
+    rudder = simulated_log["rudder_cmd"].to_numpy()
+    step = 1.0 / PLAN.log_rate_hz
+    for number, manoeuvre in enumerate(manoeuvres):
+        doublet_start = number * PLAN.manoeuvre_period_s + PLAN.lead_s
+        # the input is found on the sample where the command leaves zero: within one sample
+        assert manoeuvre.log_start_s + manoeuvre.input_start_s == pytest.approx(
+            doublet_start, abs=step
+        )
+        assert manoeuvre.input_start_s == pytest.approx(0.5, abs=1e-9)
+        inside = (time >= manoeuvre.log_start_s) & (time < manoeuvre.log_end_s)
+        assert np.all(command[inside & (time < doublet_start - step)] == 0)
+        # ends at (before) the next rudder input: no rudder sample inside, rudder on at the end
+        assert np.all(rudder[inside] == 0)
+        turn_start = doublet_start + PLAN.turn_after_doublet_s
+        assert manoeuvre.log_end_s == pytest.approx(turn_start, abs=step)
+        assert rudder[np.searchsorted(time, manoeuvre.log_end_s)] != 0
+        # deviations start near zero (run-in mean removed) and the steady state is the trim
+        run_in = manoeuvre.deviations[manoeuvre.deviations["time_s"] < 0.5]
+        assert abs(run_in["theta_rad"].mean()) < 1e-12
+        assert manoeuvre.steady_state.airspeed_m_s == pytest.approx(0.68, abs=0.03)
+
+
+def test_cutting_refuses_a_log_with_missing_columns(simulated_log):
+    with pytest.raises(UserInputError, match=r"flight3\.csv.*lacks column\(s\) rudder_cmd"):
+        cut_manoeuvres(simulated_log.drop(columns=["rudder_cmd"]), "flight3.csv")
+
+
+def test_cutting_refuses_a_nan_value(simulated_log):
+    broken = simulated_log.copy()
+    broken.loc[100, "q_rad_s"] = math.nan
+    with pytest.raises(UserInputError, match=r"q_rad_s.*row 101 is not a finite number"):
+        cut_manoeuvres(broken, "flight3.csv")
+
+
+def test_cutting_refuses_unevenly_sampled_time(simulated_log):
+    broken = simulated_log.drop(index=range(200, 260)).reset_index(drop=True)
+    with pytest.raises(UserInputError, match=r"time_s.*not uniformly spaced"):
+        cut_manoeuvres(broken, "flight3.csv")
+
+
+@pytest.mark.parametrize(
+    ("start_s", "end_s", "message"),
+    [
+        (3.0, 7.0, r"no elevator input"),
+        (0.8, 4.0, r"input at t = 1\.00 s leaves 0\.20 s of run-in"),
+        (0.5, 2.5, r"input at t = 1\.00 s is too close to the end: 1\.50 s"),
+        (1.1, 4.5, r"already under way"),
+        (20.0, 30.0, r"ends after the log does"),
+    ],
+)
+def test_a_manoeuvre_cut_in_the_wrong_place_is_refused(simulated_log, start_s, end_s, message):
+    prepared = prepare_log(simulated_log, "flight3.csv")
+    with pytest.raises(UserInputError, match=message) as refusal:
+        cut_manoeuvre(prepared, start_s, end_s)
+    assert refusal.value.where == f"flight3.csv: manoeuvre at t = {start_s:.2f}-{end_s:.2f} s"
+
+
+def test_input_too_close_to_the_log_end_refuses_the_log(simulated_log):
+    truncated = simulated_log[simulated_log["time_s"] < 17.8]  # third doublet at 17 s
+    with pytest.raises(UserInputError, match=r"input at t = 17\.00 s is too close to the end"):
+        cut_manoeuvres(truncated, "short.csv")
+    # restricting the time range to the complete manoeuvres accepts it
+    assert len(cut_manoeuvres(truncated, "short.csv", time_range_s=(0.0, 16.0))) == 2
+
+
+def test_glitches_are_removed_and_interpolated():
+    time = np.arange(2000) / 512.0
+    clean = np.radians(10.0) * np.sin(2 * np.pi * 1.5 * time)
+    glitched = clean.copy()
+    glitched[[300, 301, 302]] += np.radians(40.0)  # a three-sample marker glitch
+    glitched[1200] -= np.radians(30.0)
+    cleaned, removed = remove_elevator_glitches(time, glitched)
+    assert removed == 4
+    # linear interpolation of a smooth signal over <= 3 samples: error <= (h^2/8) max|x''| x few
+    max_curvature = np.radians(10.0) * (2 * np.pi * 1.5) ** 2
+    bound = (4 / 512.0) ** 2 / 8 * max_curvature
+    assert np.max(np.abs(cleaned - clean)) <= bound
+    unchanged, none_removed = remove_elevator_glitches(time, clean)
+    assert none_removed == 0 and np.array_equal(unchanged, clean)
+
+
+def test_a_jump_just_below_25_degrees_is_kept():
+    time = np.arange(100) / 512.0
+    step = np.where(np.arange(100) >= 50, np.radians(24.9), 0.0)
+    cleaned, removed = remove_elevator_glitches(time, step)
+    assert removed == 0 and np.array_equal(cleaned, step)
+
+
+def test_filter_is_zero_phase_and_removes_flapping_content():
+    rate = 512.0
+    time = np.arange(int(20 * rate)) / rate
+    slow = np.sin(2 * np.pi * 1.0 * time)
+    flapping = np.sin(2 * np.pi * 13.5 * time)
+    filtered = lowpass_zero_phase(slow + flapping, rate)
+    interior = slice(int(3 * rate), int(17 * rate))  # away from the edge transients
+    # forward-backward 4th-order Butterworth: gain |H|^2 = 1/(1 + (f/5)^8)
+    in_phase = 2 * np.mean(filtered[interior] * np.sin(2 * np.pi * time[interior]))
+    quadrature = 2 * np.mean(filtered[interior] * np.cos(2 * np.pi * time[interior]))
+    assert in_phase == pytest.approx(1 / (1 + (1 / 5) ** 8), abs=2e-3)
+    assert abs(quadrature) < 2e-3  # zero phase: no cosine component (one-pass would give ~0.3)
+    residual_flapping = filtered[interior] - in_phase * slow[interior]
+    assert np.max(np.abs(residual_flapping)) < 3 * 1 / (1 + (13.5 / 5) ** 8) + 2e-3
+
+
+def test_required_columns_are_the_simulator_log_columns():
+    from ornitail.sim.free_flight import LOG_COLUMNS
+
+    assert set(REQUIRED_LOG_COLUMNS) <= set(LOG_COLUMNS)
