@@ -18,6 +18,7 @@ from ornitail.acquisition.line_instrument_connection import DEFAULT_LINE_BAUD
 from ornitail.acquisition.netcanoem_protocol import DEFAULT_BASE_ID, gauge_sample_rate_ceiling_hz
 from ornitail.calibration.tool_transform import ToolTransform
 from ornitail.core.errors import UserInputError
+from ornitail.core.toml_table import TomlTable
 
 DEFAULT_RIG_FILE = Path(__file__).parent / "data" / "simulated_rig.toml"
 BALANCE_ROUTES = ("serial_daq", "can")
@@ -99,118 +100,14 @@ class RigDescription:
     limits: SafetyLimits
 
 
-class _Fields:
-    """Typed access to one table of the rig file, with errors naming file and field."""
+def _fields(path: Path, section: str, table: Any) -> TomlTable:
+    """One table of the rig file, checked against the keys it may have."""
+    return TomlTable(path, section, table, _ALLOWED_KEYS[section])
 
-    def __init__(self, path: Path, section: str, table: Any) -> None:
-        self.path = path
-        self.section = section
-        if not isinstance(table, dict):
-            raise UserInputError(f"{path}: [{section}]", "must be a table (a [section] header)")
-        self.table = table
-        unknown = sorted(set(table) - _ALLOWED_KEYS[section])
-        if unknown:
-            raise UserInputError(
-                f"{path}: [{section}].{unknown[0]}",
-                f"unknown key; allowed keys are {', '.join(sorted(_ALLOWED_KEYS[section]))}",
-            )
 
-    def where(self, key: str) -> str:
-        return f"{self.path}: [{self.section}].{key}"
-
-    def get(self, key: str, default: Any = None) -> Any:
-        if key not in self.table:
-            if default is None:
-                raise UserInputError(self.where(key), "missing")
-            return default
-        return self.table[key]
-
-    def text(self, key: str, default: str | None = None) -> str:
-        value = self.get(key, default)
-        if not isinstance(value, str) or not value.strip():
-            raise UserInputError(self.where(key), f"{value!r} must be a non-empty string")
-        return value
-
-    def boolean(self, key: str, default: bool | None = None) -> bool:
-        value = self.get(key, default)
-        if not isinstance(value, bool):
-            raise UserInputError(self.where(key), f"{value!r} must be true or false")
-        return value
-
-    def number(
-        self,
-        key: str,
-        default: float | None = None,
-        *,
-        minimum: float | None = None,
-        positive: bool = False,
-    ) -> float:
-        value = self.get(key, default)
-        if (
-            isinstance(value, bool)
-            or not isinstance(value, int | float)
-            or not math.isfinite(value)
-        ):
-            raise UserInputError(self.where(key), f"{value!r} must be a finite number")
-        if positive and value <= 0:
-            raise UserInputError(self.where(key), f"{value!r} must be > 0")
-        if minimum is not None and value < minimum:
-            raise UserInputError(self.where(key), f"{value!r} must be >= {minimum:g}")
-        return float(value)
-
-    def integer(
-        self, key: str, default: int | None = None, *, minimum: int = 0, maximum: int | None = None
-    ) -> int:
-        value = self.get(key, default)
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise UserInputError(self.where(key), f"{value!r} must be a whole number")
-        if value < minimum or (maximum is not None and value > maximum):
-            upper = "" if maximum is None else f"..{maximum}"
-            raise UserInputError(self.where(key), f"{value} must be in {minimum}{upper}")
-        return value
-
-    def interval(self, key: str) -> tuple[float, float]:
-        value = self.get(key)
-        if (
-            not isinstance(value, list)
-            or len(value) != 2
-            or any(
-                isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v)
-                for v in value
-            )
-        ):
-            raise UserInputError(
-                self.where(key), f"{value!r} must be [minimum, maximum], two finite numbers"
-            )
-        low, high = float(value[0]), float(value[1])
-        if low >= high:
-            raise UserInputError(self.where(key), f"minimum {low:g} must be below maximum {high:g}")
-        return low, high
-
-    def tool_transform(self, key: str) -> ToolTransform:
-        value = self.get(key, [0.0] * 6)
-        if (
-            not isinstance(value, list)
-            or len(value) != 6
-            or any(
-                isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v)
-                for v in value
-            )
-        ):
-            raise UserInputError(
-                self.where(key),
-                f"{value!r} must be six finite numbers [dx, dy, dz (mm), rx, ry, rz (deg)]",
-            )
-        return ToolTransform.from_mm_deg(*(float(v) for v in value))
-
-    def file(self, key: str) -> Path:
-        relative = self.text(key)
-        resolved = (self.path.parent / relative).resolve()
-        if not resolved.is_file():
-            raise UserInputError(
-                self.where(key), f"file {relative!r} not found (looked for {resolved})"
-            )
-        return resolved
+def _tool_transform(table: TomlTable, key: str) -> ToolTransform:
+    values = table.numbers(key, 6, "[dx, dy, dz (mm), rx, ry, rz (deg)]", default=[0.0] * 6)
+    return ToolTransform.from_mm_deg(*values)
 
 
 def read_rig_file(path: str | Path) -> RigDescription:
@@ -233,16 +130,12 @@ def read_rig_file(path: str | Path) -> RigDescription:
         if section not in document:
             raise UserInputError(f"{path}: [{section}]", "section missing")
 
-    rig = _Fields(path, "rig", document["rig"])
-    balance = _Fields(path, "balance", document["balance"])
-    route = balance.text("route")
-    if route not in BALANCE_ROUTES:
-        raise UserInputError(
-            balance.where("route"), f"{route!r} must be one of {', '.join(BALANCE_ROUTES)}"
-        )
+    rig = _fields(path, "rig", document["rig"])
+    balance = _fields(path, "balance", document["balance"])
+    route = balance.text("route", choices=BALANCE_ROUTES)
     simulated = rig.boolean("simulated", False)
-    daq = _Fields(path, "balance.serial_daq", balance.table.get("serial_daq", {}))
-    can = _Fields(path, "balance.can", balance.table.get("can", {}))
+    daq = _fields(path, "balance.serial_daq", balance.table.get("serial_daq", {}))
+    can = _fields(path, "balance.can", balance.table.get("can", {}))
     needs_daq = route == "serial_daq"
     serial_daq = SerialDaqSettings(
         port=daq.text("port", "simulated" if simulated or not needs_daq else None),
@@ -269,13 +162,13 @@ def read_rig_file(path: str | Path) -> RigDescription:
             f"{can_settings.sample_rate_hz:g} samples/s exceeds the CAN ceiling {can_ceiling:.0f} "
             f"samples/s at {can_settings.bit_rate} bit/s",
         )
-    tunnel = _Fields(path, "tunnel", document["tunnel"])
-    fan = _Fields(path, "fan", document["fan"])
-    strut = _Fields(path, "strut", document["strut"])
-    motor = _Fields(path, "motor", document["motor"])
-    limits = _Fields(path, "limits", document["limits"])
+    tunnel = _fields(path, "tunnel", document["tunnel"])
+    fan = _fields(path, "fan", document["fan"])
+    strut = _fields(path, "strut", document["strut"])
+    motor = _fields(path, "motor", document["motor"])
+    limits = _fields(path, "limits", document["limits"])
 
-    def line_port(fields: _Fields) -> LinePortSettings:
+    def line_port(fields: TomlTable) -> LinePortSettings:
         return LinePortSettings(
             port=fields.text("port", "simulated" if simulated else None),
             baud=fields.integer("baud", DEFAULT_LINE_BAUD, minimum=1200),
@@ -300,7 +193,7 @@ def read_rig_file(path: str | Path) -> RigDescription:
         seed=rig.integer("seed", 0),
         balance_route=route,
         calibration_path=balance.file("calibration"),
-        tool_transform=balance.tool_transform("tool_transform_mm_deg"),
+        tool_transform=_tool_transform(balance, "tool_transform_mm_deg"),
         serial_daq=serial_daq,
         can=can_settings,
         tunnel_table_path=tunnel.file("table"),

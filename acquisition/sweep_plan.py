@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.toml_table import TomlTable, is_finite_number
 
 SweepVariable = Literal["theta", "velocity", "frequency"]
 TaillessPoints = Literal["none", "steady_state", "all"]
@@ -125,77 +126,11 @@ _SWEEP_KEYS: dict[str, tuple[SweepVariable, float]] = {
 }
 
 
-class _TableReader:
-    """Reads typed, unit-carrying fields from one TOML table and names the field in every error."""
-
-    def __init__(self, source: str, table_name: str, table: Any) -> None:
-        if not isinstance(table, dict):
-            raise UserInputError(f"{source}: [{table_name}]", "missing or not a table")
-        self.source, self.table_name, self.table = source, table_name, table
-
-    def where(self, key: str) -> str:
-        return f"{self.source}: [{self.table_name}].{key}"
-
-    def number(
-        self,
-        key: str,
-        default: float | None = None,
-        minimum: float | None = None,
-        strictly_positive: bool = False,
-    ) -> float:
-        if key not in self.table:
-            if default is None:
-                raise UserInputError(self.where(key), "required field is missing")
-            return default
-        value = self.table[key]
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise UserInputError(self.where(key), f"must be a number, got {value!r}")
-        if not math.isfinite(value):
-            raise UserInputError(self.where(key), f"must be a finite number, got {value!r}")
-        if strictly_positive and value <= 0:
-            raise UserInputError(self.where(key), f"must be positive, got {value!r}")
-        if minimum is not None and value < minimum:
-            raise UserInputError(self.where(key), f"must be at least {minimum}, got {value!r}")
-        return float(value)
-
-    def integer(self, key: str, default: int, minimum: int) -> int:
-        value = self.table.get(key, default)
-        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-            raise UserInputError(self.where(key), f"must be an integer >= {minimum}, got {value!r}")
-        return value
-
-    def text(self, key: str, default: str | None = None, choices: tuple[str, ...] = ()) -> str:
-        value = self.table.get(key, default)
-        if value is None:
-            raise UserInputError(self.where(key), "required field is missing")
-        if not isinstance(value, str) or not value.strip():
-            raise UserInputError(self.where(key), f"must be a non-empty string, got {value!r}")
-        if choices and value not in choices:
-            raise UserInputError(
-                self.where(key), f"must be one of {', '.join(choices)}, got {value!r}"
-            )
-        return value
-
-    def flag(self, key: str, default: bool) -> bool:
-        value = self.table.get(key, default)
-        if not isinstance(value, bool):
-            raise UserInputError(self.where(key), f"must be true or false, got {value!r}")
-        return value
-
-    def unknown_keys(self, known: set[str]) -> None:
-        unknown = sorted(set(self.table) - known)
-        if unknown:
-            raise UserInputError(
-                self.where(unknown[0]), f"unknown field (known: {', '.join(sorted(known))})"
-            )
-
-
 def _sweep_offsets(source: str, table: Any) -> dict[SweepVariable, tuple[float, ...]]:
     """Offsets of each one-variable sweep, SI; given as a list or as ``span`` and ``steps``."""
     if table is None:
         return {}
-    reader = _TableReader(source, "sweeps", table)
-    reader.unknown_keys(set(_SWEEP_KEYS))
+    reader = TomlTable(source, "sweeps", table, _SWEEP_KEYS)
     offsets: dict[SweepVariable, tuple[float, ...]] = {}
     for key, (variable, to_si) in _SWEEP_KEYS.items():
         if key not in table:
@@ -205,22 +140,16 @@ def _sweep_offsets(source: str, table: Any) -> dict[SweepVariable, tuple[float, 
         if isinstance(spec, list):
             values = spec
         elif isinstance(spec, dict) and set(spec) == {"span", "steps"}:
-            span, steps = spec["span"], spec["steps"]
-            if not isinstance(steps, int) or isinstance(steps, bool) or steps < 1:
-                raise UserInputError(where + ".steps", f"must be an integer >= 1, got {steps!r}")
-            if not isinstance(span, int | float) or not math.isfinite(span) or span <= 0:
-                raise UserInputError(where + ".span", f"must be a positive number, got {span!r}")
+            span_and_steps = TomlTable(source, f"sweeps.{key}", spec, {"span", "steps"})
+            span = span_and_steps.number("span", positive=True)
+            steps = span_and_steps.integer("steps", minimum=1)
             values = [span * k / steps for k in range(-steps, steps + 1) if k != 0]
         else:
             raise UserInputError(
                 where, "must be a list of offsets or a table {span = ..., steps = ...}"
             )
         for value in values:
-            if (
-                isinstance(value, bool)
-                or not isinstance(value, int | float)
-                or not math.isfinite(value)
-            ):
+            if not is_finite_number(value):
                 raise UserInputError(where, f"offset {value!r} is not a finite number")
         if any(value == 0 for value in values):
             raise UserInputError(where, "an offset of 0 is the steady state; list it under repeats")
@@ -247,14 +176,17 @@ def plan_from_document(document: dict[str, Any], source: str = "<plan>") -> Swee
     unknown = sorted(set(document) - known_tables)
     if unknown:
         raise UserInputError(f"{source}: [{unknown[0]}]", "unknown table")
-    plan_table = _TableReader(source, "plan", document.get("plan", {}))
-    plan_table.unknown_keys({"name"})
-    configuration = _TableReader(source, "configuration", document.get("configuration"))
-    configuration.unknown_keys({"tail_id", "x_h_mm"})
-    steady = _TableReader(source, "steady_state", document.get("steady_state"))
-    steady.unknown_keys({"theta_deg", "v_m_s", "f_hz"})
-    protocol = _TableReader(source, "protocol", document.get("protocol", {}))
-    protocol.unknown_keys(
+    plan_table = TomlTable(source, "plan", document.get("plan", {}), {"name"})
+    configuration = TomlTable(
+        source, "configuration", document.get("configuration"), {"tail_id", "x_h_mm"}
+    )
+    steady = TomlTable(
+        source, "steady_state", document.get("steady_state"), {"theta_deg", "v_m_s", "f_hz"}
+    )
+    protocol = TomlTable(
+        source,
+        "protocol",
+        document.get("protocol", {}),
         {
             "steady_state_repeats",
             "sweep_repeats",
@@ -262,17 +194,19 @@ def plan_from_document(document: dict[str, Any], source: str = "<plan>") -> Swee
             "wind_off_tares",
             "record_s",
             "sample_rate_hz",
-        }
+        },
     )
-    settle_table = _TableReader(source, "settle", document.get("settle", {}))
-    settle_table.unknown_keys(
+    settle_table = TomlTable(
+        source,
+        "settle",
+        document.get("settle", {}),
         {
             "pitch_tolerance_deg",
             "velocity_tolerance_m_s",
             "frequency_tolerance_hz",
             "stable_for_s",
             "timeout_s",
-        }
+        },
     )
     defaults = SettleCriteria()
     settle = SettleCriteria(
@@ -280,34 +214,34 @@ def plan_from_document(document: dict[str, Any], source: str = "<plan>") -> Swee
             settle_table.number(
                 "pitch_tolerance_deg",
                 math.degrees(defaults.pitch_tolerance_rad),
-                strictly_positive=True,
+                positive=True,
             )
         ),
         velocity_tolerance_m_s=settle_table.number(
-            "velocity_tolerance_m_s", defaults.velocity_tolerance_m_s, strictly_positive=True
+            "velocity_tolerance_m_s", defaults.velocity_tolerance_m_s, positive=True
         ),
         frequency_tolerance_hz=settle_table.number(
-            "frequency_tolerance_hz", defaults.frequency_tolerance_hz, strictly_positive=True
+            "frequency_tolerance_hz", defaults.frequency_tolerance_hz, positive=True
         ),
         stable_for_s=settle_table.number("stable_for_s", defaults.stable_for_s, minimum=0.0),
-        timeout_s=settle_table.number("timeout_s", defaults.timeout_s, strictly_positive=True),
+        timeout_s=settle_table.number("timeout_s", defaults.timeout_s, positive=True),
     )
     plan = SweepPlan(
         name=plan_table.text("name", default=Path(source).stem),
         tail_id=configuration.text("tail_id"),
-        x_h_m=configuration.number("x_h_mm", strictly_positive=True) / 1000.0,
+        x_h_m=configuration.number("x_h_mm", positive=True) / 1000.0,
         theta0_rad=math.radians(steady.number("theta_deg")),
         velocity0_m_s=steady.number("v_m_s", minimum=0.0),
-        frequency0_hz=steady.number("f_hz", strictly_positive=True),
+        frequency0_hz=steady.number("f_hz", positive=True),
         sweep_offsets=_sweep_offsets(source, document.get("sweeps")),
         steady_state_repeats=protocol.integer("steady_state_repeats", 3, minimum=1),
         sweep_repeats=protocol.integer("sweep_repeats", 1, minimum=1),
         tailless_points=protocol.text(  # type: ignore[arg-type]
             "tailless_points", "steady_state", choices=("none", "steady_state", "all")
         ),
-        wind_off_tares=protocol.flag("wind_off_tares", True),
-        record_s=protocol.number("record_s", 2.0, strictly_positive=True),
-        sample_rate_hz=protocol.number("sample_rate_hz", 10_000.0, strictly_positive=True),
+        wind_off_tares=protocol.boolean("wind_off_tares", True),
+        record_s=protocol.number("record_s", 2.0, positive=True),
+        sample_rate_hz=protocol.number("sample_rate_hz", 10_000.0, positive=True),
         settle=settle,
         source=source,
     )

@@ -62,7 +62,7 @@ def test_relative_paths_resolve_against_the_rig_file_folder(tmp_path):
         (
             {"pitch_deg = [-10.0, 45.0]": "pitch_deg = [-10.0, nan]"},
             "[limits].pitch_deg",
-            "two finite numbers",
+            "must be 2 finite numbers [minimum, maximum]",
         ),
         (
             {'route = "serial_daq"': 'route = "usb"'},

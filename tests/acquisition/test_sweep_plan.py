@@ -69,17 +69,27 @@ def test_plan_inside_limits_has_no_violations_and_every_violation_is_listed():
             "steady_state",
             "theta_deg",
             float("nan"),
-            r"\[steady_state\]\.theta_deg: must be a finite",
+            r"\[steady_state\]\.theta_deg: nan must be a finite number",
         ),
-        ("steady_state", "f_hz", -13.0, r"\[steady_state\]\.f_hz: must be positive"),
-        ("steady_state", "v_m_s", "fast", r"\[steady_state\]\.v_m_s: must be a number"),
-        ("configuration", "x_h_mm", 0, r"\[configuration\]\.x_h_mm: must be positive"),
-        ("protocol", "steady_state_repeats", 0, r"steady_state_repeats: must be an integer >= 1"),
-        ("protocol", "tailless_points", "some", r"tailless_points: must be one of"),
+        ("steady_state", "f_hz", -13.0, r"\[steady_state\]\.f_hz: -13.0 must be > 0"),
+        (
+            "steady_state",
+            "v_m_s",
+            "fast",
+            r"\[steady_state\]\.v_m_s: 'fast' must be a finite number",
+        ),
+        ("configuration", "x_h_mm", 0, r"\[configuration\]\.x_h_mm: 0 must be > 0"),
+        ("protocol", "steady_state_repeats", 0, r"steady_state_repeats: 0 must be >= 1"),
+        (
+            "protocol",
+            "tailless_points",
+            "some",
+            r"tailless_points: 'some' must be one of none, steady_state, all",
+        ),
         ("protocol", "record_s", 0.2, r"record_s: 0.2 s holds fewer than 5 flapping cycles"),
-        ("protocol", "velocity", 1.0, r"\[protocol\]\.velocity: unknown field"),
+        ("protocol", "velocity", 1.0, r"\[protocol\]\.velocity: unknown key"),
         ("sweeps", "theta_deg", [0.0, 5.0], r"offset of 0 is the steady state"),
-        ("sweeps", "f_hz", {"span": 1.4, "steps": 0}, r"f_hz\.steps: must be an integer >= 1"),
+        ("sweeps", "f_hz", {"span": 1.4, "steps": 0}, r"\[sweeps\.f_hz\]\.steps: 0 must be >= 1"),
     ],
 )
 def test_bad_fields_are_named(table, key, value, message):
@@ -93,7 +103,7 @@ def test_missing_required_field_and_bad_file_are_named(tmp_path):
     document = study_document()
     del document["configuration"]["tail_id"]
     with pytest.raises(
-        UserInputError, match=r"\[configuration\]\.tail_id: required field is missing"
+        UserInputError, match=r"\[configuration\]\.tail_id: required key is missing"
     ):
         plan_from_document(document, "plan.toml")
     broken = tmp_path / "broken.toml"

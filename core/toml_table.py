@@ -1,0 +1,144 @@
+"""Typed reading of one table of a TOML file, every mistake naming the file, table and key.
+
+Rig files, sweep plans and model files all read their tables through :class:`TomlTable`, so a user sees the same
+kind of one-line message for the same kind of mistake, e.g. ``rig.toml: [limits].pitch_deg: 'x' must be a finite
+number``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from ornitail.core.errors import UserInputError
+
+
+def is_finite_number(value: Any) -> bool:
+    """True for an int or float (not a bool) that is finite."""
+    return not isinstance(value, bool) and isinstance(value, int | float) and math.isfinite(value)
+
+
+class TomlTable:
+    """Typed access to one table of a TOML file.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file (named in every message; relative file fields resolve against its folder).
+    section : str
+        The table's name, e.g. ``"limits"`` or ``"balance.can"``.
+    table : object
+        The parsed table; anything but a dict is refused.
+    allowed_keys : iterable of str
+        Keys the table may have; any other key is refused (a typo must not drop a limit).
+    """
+
+    def __init__(
+        self, path: Path | str, section: str, table: Any, allowed_keys: Iterable[str]
+    ) -> None:
+        self.path = Path(path)
+        self.section = section
+        if not isinstance(table, dict):
+            raise UserInputError(f"{path}: [{section}]", "must be a table (a [section] header)")
+        self.table = table
+        allowed = sorted(allowed_keys)
+        unknown = sorted(set(table) - set(allowed))
+        if unknown:
+            raise UserInputError(
+                f"{path}: [{section}].{unknown[0]}",
+                f"unknown key; allowed keys are {', '.join(allowed)}",
+            )
+
+    def where(self, key: str) -> str:
+        """``"<file>: [<section>].<key>"``, the place named in messages."""
+        return f"{self.path}: [{self.section}].{key}"
+
+    def get(self, key: str, default: Any = None) -> Any:
+        """The raw value; a missing key without a default is refused."""
+        if key not in self.table:
+            if default is None:
+                raise UserInputError(self.where(key), "required key is missing")
+            return default
+        return self.table[key]
+
+    def text(self, key: str, default: str | None = None, choices: Iterable[str] = ()) -> str:
+        """A non-empty string, one of ``choices`` when given."""
+        value = self.get(key, default)
+        if not isinstance(value, str) or not value.strip():
+            raise UserInputError(self.where(key), f"{value!r} must be a non-empty string")
+        choices = tuple(choices)
+        if choices and value not in choices:
+            raise UserInputError(self.where(key), f"{value!r} must be one of {', '.join(choices)}")
+        return value
+
+    def boolean(self, key: str, default: bool | None = None) -> bool:
+        """``true`` or ``false``."""
+        value = self.get(key, default)
+        if not isinstance(value, bool):
+            raise UserInputError(self.where(key), f"{value!r} must be true or false")
+        return value
+
+    def number(
+        self,
+        key: str,
+        default: float | None = None,
+        *,
+        minimum: float | None = None,
+        positive: bool = False,
+    ) -> float:
+        """A finite number, optionally > 0 or >= ``minimum``."""
+        value = self.get(key, default)
+        if not is_finite_number(value):
+            raise UserInputError(self.where(key), f"{value!r} must be a finite number")
+        if positive and value <= 0:
+            raise UserInputError(self.where(key), f"{value!r} must be > 0")
+        if minimum is not None and value < minimum:
+            raise UserInputError(self.where(key), f"{value!r} must be >= {minimum:g}")
+        return float(value)
+
+    def integer(
+        self, key: str, default: int | None = None, *, minimum: int = 0, maximum: int | None = None
+    ) -> int:
+        """A whole number in ``minimum..maximum``."""
+        value = self.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise UserInputError(self.where(key), f"{value!r} must be a whole number")
+        if maximum is None and value < minimum:
+            raise UserInputError(self.where(key), f"{value} must be >= {minimum}")
+        if maximum is not None and not minimum <= value <= maximum:
+            raise UserInputError(self.where(key), f"{value} must be in {minimum}..{maximum}")
+        return value
+
+    def numbers(
+        self, key: str, count: int, meaning: str, default: list[float] | None = None
+    ) -> list[float]:
+        """A list of exactly ``count`` finite numbers; ``meaning`` describes them in the message."""
+        value = self.get(key, default)
+        if (
+            not isinstance(value, list)
+            or len(value) != count
+            or not all(is_finite_number(v) for v in value)
+        ):
+            raise UserInputError(
+                self.where(key), f"{value!r} must be {count} finite numbers {meaning}"
+            )
+        return [float(v) for v in value]
+
+    def interval(self, key: str) -> tuple[float, float]:
+        """``[minimum, maximum]`` with minimum below maximum."""
+        low, high = self.numbers(key, 2, "[minimum, maximum]")
+        if low >= high:
+            raise UserInputError(self.where(key), f"minimum {low:g} must be below maximum {high:g}")
+        return low, high
+
+    def file(self, key: str) -> Path:
+        """An existing file, relative to the TOML file's folder."""
+        relative = self.text(key)
+        resolved = (self.path.parent / relative).resolve()
+        if not resolved.is_file():
+            raise UserInputError(
+                self.where(key), f"file {relative!r} not found (looked for {resolved})"
+            )
+        return resolved
