@@ -26,7 +26,7 @@ from ornitail.acquisition.runs_cli import runs_command
 from ornitail.core.cli import main
 from ornitail.core.errors import UserInputError
 
-CALIBRATION_FILE = Path(__file__).parents[3] / "shared" / "calibration-files" / "FT8884.cal"
+CALIBRATION_FILE = Path(__file__).parents[1] / "data" / "calibration" / "FT8884.cal"
 LAYOUT = StreamLayout([ChannelSpec(f"gauge_{index}", "V") for index in range(6)], 10_000.0)
 
 # (tail_id, x_h_m, tailed, how the run ends)

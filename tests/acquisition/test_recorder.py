@@ -28,7 +28,7 @@ from ornitail.acquisition.recording_layout import (
 from ornitail.acquisition.recording_reader import load_recording
 from ornitail.core.errors import UserInputError
 
-CALIBRATION_FILE = Path(__file__).parents[3] / "shared" / "calibration-files" / "FT8884.cal"
+CALIBRATION_FILE = Path(__file__).parents[1] / "data" / "calibration" / "FT8884.cal"
 GAUGE_CHANNELS = [ChannelSpec(f"gauge_{index}", "V") for index in range(6)]
 NINE_CHANNELS = GAUGE_CHANNELS + [
     ChannelSpec("hall_sensor", "V"),

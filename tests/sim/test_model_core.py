@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -16,7 +17,7 @@ from ornitail.sim.parameters import VehicleParameters
 from ornitail.sim.vehicle import rigid_body_mass_properties
 from ornitail.sim.wings import periodic_wing_loads
 
-REFERENCE = "/work/shared/reference/derivatives_xh98.csv"
+REFERENCE = Path(__file__).parents[1] / "data" / "reference" / "derivatives_xh98.csv"
 FLIPPED = (
     "Mu",
     "Mw",

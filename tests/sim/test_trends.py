@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from functools import cache
+from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -15,7 +16,7 @@ from ornitail.sim.effects import EffectSet
 AREA_SERIES = ("S1", "S2", "S3", "S4", "S5", "S6")  # AR ~3.45, growing S
 ASPECT_SERIES = ("AR1", "AR2", "S3", "AR4", "AR6")  # S ~118 cm^2, growing AR (S3 = AR3)
 POSITIONS = (57.0, 98.0, 126.0)
-VALIDATION = "/work/shared/reference/steady_state_validation.csv"
+VALIDATION = Path(__file__).parents[1] / "data" / "reference" / "steady_state_validation.csv"
 
 
 @cache
