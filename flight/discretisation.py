@@ -73,9 +73,7 @@ def _discretisation_function(spec: StateSpaceModelSpec, squarings: int) -> casad
         outputs = []
         for matrix in (ad, bd, c, d):
             outputs += [matrix, casadi.jacobian(casadi.vec(matrix), parameters)]
-        spec._functions[key] = casadi.Function(
-            key, [parameters, constants, time_step], outputs
-        )
+        spec._functions[key] = casadi.Function(key, [parameters, constants, time_step], outputs)
     return spec._functions[key]
 
 
@@ -117,7 +115,5 @@ def discretise(
     shapes = [spec.matrix_shape(name) for name in ("B", "B", "C", "D")]
     shapes[0] = spec.matrix_shape("A")
     matrices = [np.asarray(casadi.densify(values[2 * index])) for index in range(4)]
-    derivatives = [
-        _derivative_stack(values[2 * index + 1], shapes[index]) for index in range(4)
-    ]
+    derivatives = [_derivative_stack(values[2 * index + 1], shapes[index]) for index in range(4)]
     return DiscreteModel(*matrices, *derivatives)

@@ -72,10 +72,8 @@ def _read_parquet(path: Path) -> pd.DataFrame:
 def _read_mat(path: Path) -> pd.DataFrame:
     try:
         contents = scipy.io.loadmat(path)
-    except (ValueError, OSError, NotImplementedError) as error:
-        raise UserInputError(
-            str(path), f"not a readable MATLAB file (v4-v7.2): {error}"
-        ) from None
+    except (ValueError, OSError, NotImplementedError, scipy.io.matlab.MatReadError) as error:
+        raise UserInputError(str(path), f"not a readable MATLAB file (v4-v7.2): {error}") from None
     if "fdata" in contents:
         matrix = np.asarray(contents["fdata"], dtype=float)
         if matrix.ndim != 2:
@@ -94,9 +92,7 @@ def _read_mat(path: Path) -> pd.DataFrame:
     if not vectors:
         raise UserInputError(str(path), "no fdata matrix and no numeric vectors in the file")
     length = max(len(vector) for vector in vectors.values())
-    return pd.DataFrame(
-        {name: vector for name, vector in vectors.items() if len(vector) == length}
-    )
+    return pd.DataFrame({name: vector for name, vector in vectors.items() if len(vector) == length})
 
 
 def column_names_from_labels(labels: Sequence[str], count: int) -> list[str]:

@@ -15,24 +15,55 @@ import numpy as np
 from ornitail.flight.discretisation import DiscreteModel
 
 
-def simulate_states(model: DiscreteModel, initial_state: np.ndarray, inputs: np.ndarray) -> np.ndarray:
-    """States x[0..N-1] (N, states) for inputs (N, inputs) from ``initial_state``."""
-    forcing = inputs @ model.bd.T
-    states = np.empty((len(inputs), model.ad.shape[0]))
-    state = np.asarray(initial_state, dtype=float).copy()
-    transition = model.ad
-    for index in range(len(inputs)):
-        states[index] = state
-        state = transition @ state + forcing[index]
-    return states
+def propagate(transition: np.ndarray, forcing: np.ndarray, initial: np.ndarray) -> np.ndarray:
+    """z[0..N-1] of z[k+1] = T z[k] + forcing[k], z[0] = initial, for (N, n) or (N, n, m) forcing.
+
+    Computed in blocks of L ~ sqrt(N) steps, which gives the same sums in about 2 sqrt(N) Python
+    steps instead of N: every block's response from rest is stepped at once (L steps over all
+    blocks), the block start values are chained (N/L steps with T^L), and each block adds
+    T^j times its start value.
+    """
+    vector = np.ndim(initial) == 1
+    forcing = forcing[..., None] if vector else forcing
+    initial = np.asarray(initial, dtype=float)[:, None] if vector else np.asarray(initial, float)
+    count = len(forcing)
+    length = max(1, int(np.sqrt(count)))
+    blocks = -(-count // length)
+    padded = np.zeros((blocks * length, *forcing.shape[1:]))
+    padded[:count] = forcing
+    by_block = padded.reshape(blocks, length, *forcing.shape[1:])
+    local = np.empty_like(by_block)
+    value = np.zeros((blocks, *forcing.shape[1:]))
+    for step in range(length):
+        local[:, step] = value
+        value = transition @ value + by_block[:, step]
+    powers = np.empty((length + 1, *transition.shape))
+    powers[0] = np.eye(len(transition))
+    for step in range(length):
+        powers[step + 1] = transition @ powers[step]
+    starts = np.empty((blocks, *initial.shape))
+    start = initial
+    for block in range(blocks):
+        starts[block] = start
+        start = powers[length] @ start + value[block]
+    result = local + powers[None, :length] @ starts[:, None]
+    result = result.reshape(blocks * length, *forcing.shape[1:])[:count]
+    return result[..., 0] if vector else result
 
 
 def simulate_outputs(
     model: DiscreteModel, initial_state: np.ndarray, inputs: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Outputs (N, outputs) and states (N, states) of the discrete model."""
-    states = simulate_states(model, initial_state, inputs)
+    """Outputs (N, outputs) and states (N, states) of the discrete model for inputs (N, inputs)."""
+    states = propagate(model.ad, inputs @ model.bd.T, initial_state)
     return states @ model.c.T + inputs @ model.d.T, states
+
+
+def _times_stack(signals: np.ndarray, stack: np.ndarray) -> np.ndarray:
+    """out[k, a, j] = sum_b stack[j, a, b] signals[k, b] for (N, b) signals, (J, a, b) stack."""
+    count, rows = stack.shape[0], stack.shape[1]
+    flat = stack.transpose(2, 1, 0).reshape(stack.shape[2], rows * count)
+    return (signals @ flat).reshape(len(signals), rows, count)
 
 
 def output_sensitivities(
@@ -46,25 +77,21 @@ def output_sensitivities(
     the initial state when ``initial_state_columns``.
     """
     state_count = model.ad.shape[0]
-    d_ad = model.d_ad[parameter_indices]
-    d_bd = model.d_bd[parameter_indices]
-    # forcing[k, i, j] = (dAd_j x[k] + dBd_j u[k])_i
-    forcing = np.einsum("jab,kb->kaj", d_ad, states) + np.einsum("jab,kb->kaj", d_bd, inputs)
-    columns = len(parameter_indices) + (state_count if initial_state_columns else 0)
-    sensitivity = np.zeros((state_count, columns))
+    parameter_count = len(parameter_indices)
+    forcing = _times_stack(states, model.d_ad[parameter_indices]) + _times_stack(
+        inputs, model.d_bd[parameter_indices]
+    )
+    initial = np.zeros((state_count, parameter_count))
     if initial_state_columns:
-        sensitivity[:, len(parameter_indices) :] = np.eye(state_count)
+        initial = np.hstack([initial, np.eye(state_count)])
         forcing = np.concatenate(
             [forcing, np.zeros((len(states), state_count, state_count))], axis=2
         )
-    state_sensitivities = np.empty((len(states), state_count, columns))
-    transition = model.ad
-    for index in range(len(states)):
-        state_sensitivities[index] = sensitivity
-        sensitivity = transition @ sensitivity + forcing[index]
-    result = np.einsum("oa,kaj->koj", model.c, state_sensitivities)
-    direct = np.einsum("joa,ka->koj", model.d_c[parameter_indices], states) + np.einsum(
-        "joa,ka->koj", model.d_d[parameter_indices], inputs
-    )
-    result[:, :, : len(parameter_indices)] += direct
+    state_sensitivities = propagate(model.ad, forcing, initial)  # (N, states, theta)
+    count, columns = len(states), initial.shape[1]
+    flat = state_sensitivities.transpose(1, 0, 2).reshape(state_count, count * columns)
+    result = (model.c @ flat).reshape(-1, count, columns).transpose(1, 0, 2)
+    result[:, :, :parameter_count] += _times_stack(
+        states, model.d_c[parameter_indices]
+    ) + _times_stack(inputs, model.d_d[parameter_indices])
     return result

@@ -144,7 +144,9 @@ class StateSpaceModelSpec:
     ) -> NumericStateSpace:
         """Numeric A, B, C, D for the given parameter and constant values (floats)."""
         values = {**constant_values, **parameter_values}
-        missing = [name for name in (*self.parameter_names, *self.constant_names) if name not in values]
+        missing = [
+            name for name in (*self.parameter_names, *self.constant_names) if name not in values
+        ]
         if missing:
             raise UserInputError(self.source, f"no value given for {missing[0]!r}")
         numeric = {}
@@ -191,7 +193,9 @@ class StateSpaceModelSpec:
             parameters = casadi.SX.sym("p", len(self.parameters))
             constants = casadi.SX.sym("c", len(self.constant_names))
             self._functions["matrices"] = casadi.Function(
-                "matrices", [parameters, constants], list(self.symbolic_matrices(parameters, constants))
+                "matrices",
+                [parameters, constants],
+                list(self.symbolic_matrices(parameters, constants)),
             )
         return self._functions["matrices"]
 
@@ -312,9 +316,7 @@ def model_from_document(document: Mapping[str, Any], source: str) -> StateSpaceM
         )
     for signal in (*states, *outputs):
         if signal in columns and columns[signal].constant is not None:
-            raise UserInputError(
-                f"{source}: [columns].{signal}", "only inputs may be constants"
-            )
+            raise UserInputError(f"{source}: [columns].{signal}", "only inputs may be constants")
     if initial_state == "data":
         for state in states:
             if state not in columns:
@@ -441,7 +443,9 @@ def _parameters(table: Mapping[str, Any], source: str) -> tuple[ParameterSpec, .
         if "upper" in value:
             upper = require_finite_value(f"{where}.upper", value["upper"])
         if lower >= upper:
-            raise UserInputError(f"{where}.lower", f"lower bound {lower:g} is not below upper {upper:g}")
+            raise UserInputError(
+                f"{where}.lower", f"lower bound {lower:g} is not below upper {upper:g}"
+            )
         if not lower <= start <= upper:
             raise UserInputError(
                 f"{where}.start", f"start {start:g} lies outside the bounds [{lower:g}, {upper:g}]"
@@ -467,7 +471,9 @@ def _matrix(
             raise UserInputError(where, "matrix missing")
     if value == "identity":
         if rows != columns:
-            raise UserInputError(where, f"'identity' needs a square matrix, this one is {rows}x{columns}")
+            raise UserInputError(
+                where, f"'identity' needs a square matrix, this one is {rows}x{columns}"
+            )
         value = [[1 if row == column else 0 for column in range(columns)] for row in range(rows)]
     if value == "zero":
         value = [[0] * columns for _ in range(rows)]
@@ -512,7 +518,9 @@ def _columns(table: Mapping[str, Any], source: str) -> dict[str, SignalColumn]:
             raise UserInputError(where, "give exactly one of column or constant")
         if "constant" in value:
             if set(value) != {"constant"}:
-                raise UserInputError(where, "a constant signal takes no scale, offset or mean removal")
+                raise UserInputError(
+                    where, "a constant signal takes no scale, offset or mean removal"
+                )
             columns[signal] = SignalColumn(
                 signal, constant=require_finite_value(f"{where}.constant", value["constant"])
             )

@@ -1,0 +1,137 @@
+"""Model files: the presets load; every mistake names the file and the field."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ornitail.core.errors import UserInputError
+from ornitail.flight.model_file import PRESET_DIRECTORY, load_model, preset_names
+from ornitail.sim.configuration import study_configuration
+from ornitail.sim.dynamics import linearise
+
+MINIMAL = """
+[model]
+states = ["x"]
+inputs = ["u"]
+outputs = ["y"]
+
+[constants]
+k = 2.0
+
+[parameters]
+a = { start = -1.0, lower = -10.0, upper = 0.0 }
+b = 0.5
+
+[matrices]
+A = [["a"]]
+B = [["b*k"]]
+C = [[1]]
+
+[data]
+time_column = "t"
+
+[columns]
+x = "x_col"
+y = "x_col"
+u = { column = "u_deg", scale = 0.0174533 }
+"""
+
+
+def write_model(tmp_path: Path, text: str) -> Path:
+    path = tmp_path / "model.toml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_the_presets_load_by_name():
+    assert set(preset_names()) >= {"delfly_longitudinal", "twin_otter_short_period"}
+    delfly = load_model("delfly_longitudinal")
+    assert delfly.states == ("q", "u", "w", "theta") and delfly.inputs == ("elevator",)
+    assert len(delfly.free_parameter_names) == 12
+    otter = load_model("twin_otter_short_period")
+    assert otter.outputs == ("alpha", "q", "a_z") and otter.columns["bias"].constant == 1.0
+
+
+def test_the_delfly_preset_is_the_simulators_linear_model():
+    """With the simulator's derivatives and trim, the preset's A and B equal linearise()'s."""
+    linear = linearise(study_configuration("S3", 98))
+    model = load_model("delfly_longitudinal")
+    constants = {
+        "m": linear.mass_kg,
+        "Iyy": linear.iyy_kg_m2,
+        "g": 9.81,
+        "theta0": linear.trim.theta_rad,
+        "u0": linear.trim.u0_m_s,
+        "w0": linear.trim.w0_m_s,
+    }
+    numeric = model.with_constants(constants).state_space(linear.derivatives, constants)
+    # linearise() is a central difference of the nonlinear model (steps 1e-3): agreement to 1e-4
+    # relative of the largest entry.
+    scale = np.abs(linear.a_matrix).max()
+    np.testing.assert_allclose(numeric.a_matrix, linear.a_matrix, atol=1e-4 * scale)
+    np.testing.assert_allclose(numeric.b_matrix, linear.b_matrix, atol=1e-4 * scale)
+    np.testing.assert_array_equal(numeric.c_matrix, np.eye(4))
+
+
+def test_a_file_path_loads_and_builds_numeric_matrices(tmp_path):
+    model = load_model(write_model(tmp_path, MINIMAL))
+    numeric = model.state_space({"a": -3.0, "b": 0.25}, model.constants)
+    assert numeric.a_matrix.tolist() == [[-3.0]] and numeric.b_matrix.tolist() == [[0.5]]
+    assert numeric.d_matrix.tolist() == [[0.0]]
+    assert model.parameter("a").lower == -10.0 and math.isinf(model.parameter("b").upper)
+    assert model.columns["u"].scale == pytest.approx(0.0174533)
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "where", "problem"),
+    [
+        ('A = [["a"]]', 'A = [["a*zeta"]]', "[matrices].A[1][1]", "unknown name 'zeta'"),
+        ('B = [["b*k"]]', 'B = [["b", "k"]]', "[matrices].B", "must be 1x1, found 1x2"),
+        ("C = [[1]]", 'C = [["__import__(1)"]]', "[matrices].C[1][1]", "only the functions"),
+        ("upper = 0.0 }", "upper = -20.0 }", "[parameters].a.lower", "not below upper"),
+        ("lower = -10.0", "lower = -0.5", "[parameters].a.start", "outside the bounds"),
+        ("k = 2.0", "k = nan", "[constants].k", "not a finite number"),
+        ("k = 2.0", 'k = "two"', "[constants].k", "expected a number"),
+        ('y = "x_col"\n', "", "[columns]", "no column given for signal 'y'"),
+        ('time_column = "t"', 'time_colum = "t"', "[data].time_colum", "unknown field"),
+        ("b = 0.5", "b = { start = 0.5, fixd = true }", "[parameters].b.fixd", "unknown field"),
+        ('outputs = ["y"]', 'outputs = ["y", "y"]', "[model].outputs", "unique"),
+        (
+            'states = ["x"]',
+            'states = ["x"]\ninitial_state = "guess"',
+            "initial_state",
+            "must be one",
+        ),
+        ('x = "x_col"', 'z = "x_col"', "[columns].z", "not a state, input or output"),
+        ("b = 0.5", "k = 0.5", "[parameters].k", "also defined as a constant"),
+    ],
+)
+def test_mistakes_name_file_and_field(tmp_path, old, new, where, problem):
+    assert old in MINIMAL
+    path = write_model(tmp_path, MINIMAL.replace(old, new))
+    with pytest.raises(UserInputError) as error:
+        load_model(path)
+    assert str(path) in error.value.where and where in error.value.where
+    assert problem in error.value.problem
+
+
+def test_missing_file_and_bad_toml_are_user_errors(tmp_path):
+    with pytest.raises(UserInputError, match="not a preset name"):
+        load_model(tmp_path / "nothing.toml")
+    with pytest.raises(UserInputError, match="not a valid TOML"):
+        load_model(write_model(tmp_path, "[model\nstates = 1"))
+
+
+def test_with_constants_refuses_unknown_names_and_nan():
+    model = load_model("delfly_longitudinal")
+    assert model.with_constants({"m": 0.03}).constants["m"] == 0.03
+    with pytest.raises(UserInputError):
+        model.with_constants({"mass": 0.03})
+    with pytest.raises(UserInputError):
+        model.with_constants({"m": math.nan})
+
+
+def test_preset_files_are_shipped_in_the_package_folder():
+    assert (PRESET_DIRECTORY / "delfly_longitudinal.toml").is_file()
