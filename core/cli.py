@@ -31,11 +31,13 @@ def _register_area_commands() -> None:
     from ornitail.acquisition.sweep_cli import sweep_command
     from ornitail.calibration.cli import calibration_group
     from ornitail.core.demo import demo_command
+    from ornitail.flight.campaign_cli import campaign_command
     from ornitail.flight.cli import flight_group
     from ornitail.sim.cli import sim_group
 
     main.add_command(calibration_group)
     main.add_command(demo_command)
+    flight_group.add_command(campaign_command)
     main.add_command(flight_group)
     main.add_command(runs_command)
     main.add_command(sim_group)

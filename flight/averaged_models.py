@@ -1,4 +1,4 @@
-"""The mathematics of combining per-manoeuvre estimates (no estimator needed here).
+"""The three averaged models of a configuration and the mathematics of combining estimates.
 
 - mean of parameters, with the covariance of the mean from the spread across manoeuvres;
 - covariance-weighted mean (minimum-covariance combination)
@@ -19,7 +19,11 @@ import pandas as pd
 from scipy.stats import chi2
 
 from ornitail.core.errors import UserInputError
+from ornitail.flight.identification_result import IdentificationResult
+from ornitail.flight.identify import identify
+from ornitail.flight.manoeuvre_models import ManoeuvreModel
 from ornitail.flight.manoeuvres import Manoeuvre
+from ornitail.flight.model_file import StateSpaceModelSpec
 
 MERGE_SIGNIFICANCE = 0.05
 
@@ -135,3 +139,58 @@ def time_averaged_response(manoeuvres: Sequence[Manoeuvre]) -> pd.DataFrame:
     averaged = pd.DataFrame(stack.mean(axis=0), columns=columns)
     averaged.insert(0, "time_s", np.arange(before + after) * interval)
     return averaged
+
+
+@dataclass(frozen=True)
+class AveragedModel:
+    """One of the three averaged models of a configuration (parameter order ``parameter_names``).
+
+    ``name`` is ``"mean"``, ``"weighted"`` or ``"time_averaged"``; ``merge`` holds the chi-square
+    test for the weighted mean; ``result`` the identification of the time-averaged response.
+    """
+
+    name: str
+    parameter_names: tuple[str, ...]
+    estimate: CombinedEstimate
+    merge: WeightedMerge | None = None
+    result: IdentificationResult | None = None
+
+    def parameter_values(self) -> dict[str, float]:
+        return dict(zip(self.parameter_names, self.estimate.values.tolist(), strict=True))
+
+
+AVERAGED_MODEL_NAMES = ("mean", "weighted", "time_averaged")
+
+
+def fit_time_averaged_model(
+    spec: StateSpaceModelSpec, manoeuvres: Sequence[Manoeuvre]
+) -> AveragedModel:
+    """Identify ``spec`` (constants at the configuration's trim) once on the time-averaged
+    response of ``manoeuvres``: equation error, then output error started from it.
+    """
+    data = time_averaged_response(manoeuvres)
+    first_guess = identify(spec, data, method="equation_error")
+    start = {name: first_guess.parameters[name].value for name in first_guess.parameter_names}
+    result = identify(spec, data, method="output_error", start=start)
+    estimate = CombinedEstimate(result.parameter_vector(), np.asarray(result.covariance_colored))
+    return AveragedModel("time_averaged", result.parameter_names, estimate, result=result)
+
+
+def averaged_models(
+    spec: StateSpaceModelSpec,
+    models: Sequence[ManoeuvreModel],
+) -> list[AveragedModel]:
+    """The mean, covariance-weighted and time-averaged-response models of ``models``' manoeuvres.
+
+    ``spec`` carries the configuration's trim constants (used by the time-averaged fit).
+    """
+    names = models[0].parameter_names
+    if any(model.parameter_names != names for model in models):
+        raise ValueError("all manoeuvre models must estimate the same parameters")
+    values = np.array([model.values for model in models])
+    merge = covariance_weighted_mean(values, [model.covariance for model in models])
+    return [
+        AveragedModel("mean", names, mean_of_parameters(values)),
+        AveragedModel("weighted", names, merge, merge=merge),
+        fit_time_averaged_model(spec, [model.manoeuvre for model in models]),
+    ]

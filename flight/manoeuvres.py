@@ -59,6 +59,7 @@ class Manoeuvre:
     ``deviations`` holds ``time_s`` (from the manoeuvre start, s), the four states and
     ``elevator_rad`` as deviations from ``steady_state`` (SI units), after glitch removal and
     filtering. ``input_start_s`` is the input's time from the manoeuvre start (the run-in, 0.5 s).
+    ``glitches_removed`` counts the elevator samples inside the manoeuvre that were interpolated.
     """
 
     log_name: str
@@ -68,6 +69,7 @@ class Manoeuvre:
     input_start_s: float
     steady_state: SteadyState
     deviations: pd.DataFrame
+    glitches_removed: int = 0
 
     @property
     def label(self) -> str:
@@ -86,7 +88,7 @@ class PreparedLog:
     raw: pd.DataFrame
     filtered: pd.DataFrame
     sample_rate_hz: float
-    glitches_removed: int
+    glitch_mask: np.ndarray  # True where the elevator sample was a glitch (interpolated)
 
 
 def require_log_columns(log: pd.DataFrame, log_name: str) -> None:
@@ -124,36 +126,38 @@ def sample_rate_of(time_s: np.ndarray, log_name: str) -> float:
     return 1.0 / typical
 
 
+def elevator_glitch_mask(
+    elevator_rad: np.ndarray, threshold_rad: float = GLITCH_THRESHOLD_RAD
+) -> np.ndarray:
+    """True for elevator samples (rad) that jump by ``threshold_rad`` or more from the last good
+    sample (so a spike of several samples is marked as a whole and the sample after it is kept).
+    """
+    elevator_rad = np.asarray(elevator_rad, dtype=float)
+    glitch = np.zeros(elevator_rad.size, dtype=bool)
+    last_good = elevator_rad[0]
+    for index in range(1, elevator_rad.size):
+        if abs(elevator_rad[index] - last_good) >= threshold_rad:
+            glitch[index] = True
+        else:
+            last_good = elevator_rad[index]
+    return glitch
+
+
 def remove_elevator_glitches(
     time_s: np.ndarray,
     elevator_rad: np.ndarray,
     threshold_rad: float = GLITCH_THRESHOLD_RAD,
-) -> tuple[np.ndarray, int]:
-    """Drop elevator samples that jump by ``threshold_rad`` or more and interpolate over them.
+) -> tuple[np.ndarray, np.ndarray]:
+    """Replace elevator glitches (:func:`elevator_glitch_mask`) by linear interpolation in time.
 
-    A sample is a glitch when it differs from the last good sample by at least the threshold (so
-    a spike of several samples is removed as a whole and the sample after it is kept).
-
-    Returns
-    -------
-    cleaned : ndarray
-        Elevator deflection (rad) with glitches replaced by linear interpolation in time.
-    removed : int
-        Number of samples replaced.
+    Returns the cleaned deflection (rad) and the glitch mask (True where a sample was replaced).
     """
     elevator_rad = np.asarray(elevator_rad, dtype=float)
-    good = np.ones(elevator_rad.size, dtype=bool)
-    last_good = elevator_rad[0]
-    for index in range(1, elevator_rad.size):
-        if abs(elevator_rad[index] - last_good) >= threshold_rad:
-            good[index] = False
-        else:
-            last_good = elevator_rad[index]
-    removed = int(np.count_nonzero(~good))
-    if removed == 0:
-        return elevator_rad.copy(), 0
-    cleaned = np.interp(time_s, np.asarray(time_s)[good], elevator_rad[good])
-    return cleaned, removed
+    glitch = elevator_glitch_mask(elevator_rad, threshold_rad)
+    if not glitch.any():
+        return elevator_rad.copy(), glitch
+    time_s = np.asarray(time_s, dtype=float)
+    return np.interp(time_s, time_s[~glitch], elevator_rad[~glitch]), glitch
 
 
 def lowpass_zero_phase(
@@ -171,7 +175,14 @@ def lowpass_zero_phase(
             "filter cutoff", f"{cutoff_hz:g} Hz must lie below half the sample rate"
         )
     sections = butter(order, cutoff_hz, btype="lowpass", fs=sample_rate_hz, output="sos")
-    return sosfiltfilt(sections, np.asarray(signal, dtype=float), axis=0)
+    signal = np.asarray(signal, dtype=float)
+    edge_samples = 3 * (2 * len(sections) + 1)  # sosfiltfilt's default padding
+    if signal.shape[0] <= edge_samples:
+        raise UserInputError(
+            "flight log",
+            f"{signal.shape[0]} samples are too few to filter (need {edge_samples + 1})",
+        )
+    return sosfiltfilt(sections, signal, axis=0)
 
 
 def prepare_log(log: pd.DataFrame, log_name: str) -> PreparedLog:
@@ -296,6 +307,7 @@ def cut_manoeuvre(
         input_start_s=float(input_s - start_s),
         steady_state=steady,
         deviations=deviations,
+        glitches_removed=int(np.count_nonzero(prepared.glitch_mask[inside])),
     )
 
 

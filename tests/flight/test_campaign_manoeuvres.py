@@ -105,21 +105,21 @@ def test_glitches_are_removed_and_interpolated():
     glitched = clean.copy()
     glitched[[300, 301, 302]] += np.radians(40.0)  # a three-sample marker glitch
     glitched[1200] -= np.radians(30.0)
-    cleaned, removed = remove_elevator_glitches(time, glitched)
-    assert removed == 4
+    cleaned, glitches = remove_elevator_glitches(time, glitched)
+    assert np.flatnonzero(glitches).tolist() == [300, 301, 302, 1200]
     # linear interpolation of a smooth signal over <= 3 samples: error <= (h^2/8) max|x''| x few
     max_curvature = np.radians(10.0) * (2 * np.pi * 1.5) ** 2
     bound = (4 / 512.0) ** 2 / 8 * max_curvature
     assert np.max(np.abs(cleaned - clean)) <= bound
-    unchanged, none_removed = remove_elevator_glitches(time, clean)
-    assert none_removed == 0 and np.array_equal(unchanged, clean)
+    unchanged, none_found = remove_elevator_glitches(time, clean)
+    assert not none_found.any() and np.array_equal(unchanged, clean)
 
 
 def test_a_jump_just_below_25_degrees_is_kept():
     time = np.arange(100) / 512.0
     step = np.where(np.arange(100) >= 50, np.radians(24.9), 0.0)
-    cleaned, removed = remove_elevator_glitches(time, step)
-    assert removed == 0 and np.array_equal(cleaned, step)
+    cleaned, glitches = remove_elevator_glitches(time, step)
+    assert not glitches.any() and np.array_equal(cleaned, step)
 
 
 def test_filter_is_zero_phase_and_removes_flapping_content():
@@ -138,7 +138,26 @@ def test_filter_is_zero_phase_and_removes_flapping_content():
     assert np.max(np.abs(residual_flapping)) < 3 * 1 / (1 + (13.5 / 5) ** 8) + 2e-3
 
 
+def test_a_log_too_short_to_filter_is_refused(simulated_log):
+    with pytest.raises(UserInputError, match=r"10 samples are too few to filter"):
+        cut_manoeuvres(simulated_log.iloc[:10], "tiny.csv")
+
+
 def test_required_columns_are_the_simulator_log_columns():
     from ornitail.sim.free_flight import LOG_COLUMNS
 
     assert set(REQUIRED_LOG_COLUMNS) <= set(LOG_COLUMNS)
+
+
+def test_glitches_in_a_log_are_counted_and_do_not_reach_the_manoeuvre(simulated_log):
+    glitched = simulated_log.copy()
+    rows = [1000, 1001, 5200, 9000]  # two in manoeuvre 1 (t ~ 1.95 s), one in 2, one in 3
+    glitched.loc[rows, "elevator_rad"] += np.radians(35.0)
+    clean = cut_manoeuvres(simulated_log, "clean.csv")
+    repaired = cut_manoeuvres(glitched, "glitched.csv")
+    assert [m.glitches_removed for m in repaired] == [2, 1, 1]
+    for before, after in zip(clean, repaired, strict=True):
+        # interpolating over <= 2 samples of a smooth (lagged, 0.02 s) deflection: the filtered
+        # signals differ by far less than the 35 deg spike (which would leave ~1 deg after 5 Hz)
+        difference = before.deviations["elevator_rad"] - after.deviations["elevator_rad"]
+        assert np.max(np.abs(difference)) < np.radians(0.05)

@@ -1,0 +1,147 @@
+"""``ornitail flight campaign``: option handling, refusals, and a run through the console script."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from ornitail.core.errors import UserInputError
+from ornitail.flight.campaign_cli import campaign_command
+from ornitail.sim.configuration import study_configuration
+from ornitail.sim.dynamics import linearise
+from ornitail.sim.free_flight import FlightPlan, simulate_flight, write_flight_log_csv
+
+MANOEUVRES = 5
+
+
+@pytest.fixture(scope="module")
+def s3_log(tmp_path_factory) -> Path:
+    """A simulated 5-manoeuvre flight of S3 at 98 mm written as a CSV flight log."""
+    log = simulate_flight(
+        study_configuration("S3", 98.0), plan=FlightPlan(duration_s=8.0 * MANOEUVRES), seed=21
+    )
+    return write_flight_log_csv(log, tmp_path_factory.mktemp("logs") / "s3_98.csv")
+
+
+def _ornitail() -> str:
+    found = shutil.which("ornitail") or str(Path(sys.executable).parent / "ornitail")
+    probe = subprocess.run(
+        [found, "flight", "campaign", "--help"], capture_output=True, text=True, check=False
+    )
+    if probe.returncode != 0:
+        pytest.skip("`ornitail flight campaign` is not registered in the console command yet")
+    return found
+
+
+@pytest.mark.parametrize(
+    ("arguments", "message"),
+    [
+        (["--simulate", "S3@98", "--log", "S3@98=a.csv"], "exactly one of"),
+        ([], "exactly one of"),
+        (["--simulate", "S3-98"], "'S3-98' is not TAIL@X_H_MM"),
+        (["--simulate", "S3@98", "--manoeuvres", "2"], "fewer than 3"),
+        (["--log", "S3@98"], "is not LABEL=VALUE"),
+        (["--log", "S3@98=a.csv", "--mass-kg", "heavy"], "'heavy' is not a number"),
+        (["--log", "S3@98=a.csv", "--mass-kg", "-0.02"], "must be a positive finite number"),
+    ],
+)
+def test_option_mistakes_are_refused(arguments, message, tmp_path):
+    result = CliRunner().invoke(campaign_command, [*arguments, "--out", str(tmp_path)])
+    assert isinstance(result.exception, UserInputError)
+    assert message in str(result.exception)
+
+
+def test_logs_without_mass_properties_are_refused(s3_log, tmp_path):
+    result = CliRunner().invoke(
+        campaign_command, ["--log", f"S3@98={s3_log}", "--out", str(tmp_path)]
+    )
+    assert isinstance(result.exception, UserInputError)
+    assert "S3@98: flight logs need the vehicle's mass_kg and iyy_kg_m2" in str(result.exception)
+
+
+def test_a_log_with_missing_columns_is_refused(s3_log, tmp_path):
+    broken = tmp_path / "broken.csv"
+    broken.write_text(
+        "\n".join(",".join(line.split(",")[:-1]) for line in s3_log.read_text().splitlines())
+    )  # drops the last column, rudder_cmd
+    result = CliRunner().invoke(
+        campaign_command,
+        ["--log", f"S3@98={broken}", "--mass-kg", "0.0234", "--iyy-kg-m2", "1.35e-4"],
+    )
+    assert isinstance(result.exception, UserInputError)
+    assert f"{broken}: flight log lacks column(s) rudder_cmd" in str(result.exception)
+
+
+def test_campaign_file_run_through_the_console_script(s3_log, tmp_path):
+    executable = _ornitail()
+    reference = linearise(study_configuration("S3", 98.0))
+    campaign = tmp_path / "campaign.toml"
+    campaign.write_text(
+        'seed = 5\n[[configuration]]\ntail = "S3"\nx_h_mm = 98\n'
+        f"mass_kg = {reference.mass_kg!r}\niyy_kg_m2 = {reference.iyy_kg_m2!r}\n"
+        f'log = ["{s3_log}"]\n'
+    )
+    out = tmp_path / "out"
+    completed = subprocess.run(
+        [
+            executable,
+            "flight",
+            "campaign",
+            "--campaign",
+            str(campaign),
+            "--out",
+            str(out),
+            "--no-pictures",
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=300,
+    )
+    assert completed.returncode == 0, completed.stderr
+    document = json.loads(completed.stdout)  # exactly one JSON object on stdout
+    assert "flight campaign" in completed.stderr  # the progress bar goes to stderr
+    (row,) = document["configurations"]
+    assert row["configuration"] == "S3@98" and document["seed"] == 5
+    assert row["manoeuvres"] == MANOEUVRES
+    # the same bias allowance as the simulated campaign tests (0.03 in damping ratio)
+    assert row["damping_ratio"] == pytest.approx(reference.oscillatory_damping_ratio(), abs=0.03)
+    assert (out / "representative_models.csv").is_file()
+    assert sorted(document["written"]) == sorted(
+        str(out / name) for name in ("representative_models.csv", "representative_models.json")
+    )
+
+
+def test_a_refused_log_is_one_line_and_exit_code_2_in_the_console_script(s3_log, tmp_path):
+    executable = _ornitail()
+    missing = tmp_path / "missing.csv"
+    completed = subprocess.run(
+        [
+            executable,
+            "flight",
+            "campaign",
+            "--log",
+            f"S3@98={missing}",
+            "--mass-kg",
+            "0.0234",
+            "--iyy-kg-m2",
+            "1.35e-4",
+            "--out",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert completed.returncode == 2
+    assert (
+        completed.stderr.strip().splitlines()[-1]
+        == f"ornitail: error: {missing}: flight log not found"
+    )
