@@ -7,6 +7,8 @@ numpy's own ``sum(axis=0)`` over it (``benchmarks/cycle_average.py``).
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,58 +23,101 @@ def _cycle_sample_bounds(cycles: FlapCycles, sample_rate_hz: float, n_samples: i
     return np.clip(np.column_stack([first, stop]), 0, n_samples)
 
 
-BLOCK_ROWS = 16
-"""Rows per block in :func:`segment_sums` (a power of two)."""
+BLOCK_ROWS = 64
+"""Rows per block in :func:`prefix_sums_at` (even)."""
+PARALLEL_MINIMUM_BLOCKS = 16_384
+"""Records of at least this many blocks (about 10 s at 10 kHz) have their block sums taken on several threads."""
 
 
-def _partial_rows_sum(data: np.ndarray, first: np.ndarray, stop: np.ndarray) -> np.ndarray:
-    """Sum of rows ``first[i] .. stop[i] - 1`` for spans of at most :data:`BLOCK_ROWS` rows, float64."""
-    rows = first[:, None] + np.arange(BLOCK_ROWS)[None, :]
-    outside = rows >= stop[:, None]
-    gathered = data[np.minimum(rows, len(data) - 1)]
-    gathered[outside] = 0
-    return gathered.sum(axis=1, dtype=np.float64)
+def _rows_sum(data: np.ndarray, first: np.ndarray, count: np.ndarray, width: int) -> np.ndarray:
+    """Sum of rows ``first[i] .. first[i] + count[i] - 1`` (``count <= width``), float64, shape (m, n_cols).
 
-
-def _block_sums(data: np.ndarray, block_count: int) -> np.ndarray:
-    """Column sums of each block of :data:`BLOCK_ROWS` rows, shape (block_count, n_cols), by pairwise halving.
-
-    Each halving adds the first half of every block's rows to the second half; both halves are contiguous runs
-    of ``rows x n_cols`` values, so numpy adds long contiguous stretches instead of reducing nine values at a time
-    along a strided axis.
+    Gathers one contiguous window of ``width`` rows per span through a strided view (a memory copy of
+    ``width x n_cols`` values each) and sums it with 0/1 weights that leave out the rows outside the span.
     """
-    width = data.shape[1]
-    sums = data[: block_count * BLOCK_ROWS].reshape(block_count, BLOCK_ROWS * width)
-    rows = BLOCK_ROWS
-    while rows > 1:
-        rows //= 2
-        sums = sums[:, : rows * width] + sums[:, rows * width :]
+    width = min(width, len(data))
+    windows = np.lib.stride_tricks.as_strided(
+        data,
+        shape=(len(data) - width + 1, width, data.shape[1]),
+        strides=(data.strides[0], data.strides[0], data.strides[1]),
+        writeable=False,
+    )
+    start = np.minimum(first, len(data) - width)
+    shift = (first - start)[:, None]
+    column = np.arange(width)[None, :]
+    inside = (column >= shift) & (column < shift + count[:, None])
+    weights = inside.astype(data.dtype)[:, None, :]
+    return np.matmul(weights, windows[start])[:, 0, :].astype(np.float64)
+
+
+def _block_sums(blocks: np.ndarray) -> np.ndarray:
+    """Sum over axis 1 of (n_blocks, rows, n_cols), one ``einsum`` per chunk, chunks on parallel threads.
+
+    ``einsum`` releases the GIL, so long records use every core; records under
+    :data:`PARALLEL_MINIMUM_BLOCKS` blocks are summed in one call.
+    """
+    sums = np.empty((blocks.shape[0], blocks.shape[2]), dtype=blocks.dtype)
+    workers = min(os.cpu_count() or 1, 8)
+    if workers == 1 or len(blocks) < PARALLEL_MINIMUM_BLOCKS:
+        return np.einsum("ijk->ik", blocks, out=sums)
+    edges = np.linspace(0, len(blocks), 2 * workers + 1).astype(int)
+
+    def sum_chunk(index: int) -> None:
+        chunk = slice(edges[index], edges[index + 1])
+        np.einsum("ijk->ik", blocks[chunk], out=sums[chunk])
+
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        list(pool.map(sum_chunk, range(len(edges) - 1)))
     return sums
+
+
+def prefix_sums_at(data: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Column sums of ``data[:p]`` for every ``p`` in ``rows`` (0 <= p <= n), float64, shape (len(rows), n_cols).
+
+    Numpy reduces a C-ordered (n, 9) array along axis 0 nine values at a time, which is slow, and a prefix sum
+    of every row would need a float64 copy of the whole record. Instead the record is cut into blocks of
+    :data:`BLOCK_ROWS` rows, each block summed in streaming ``einsum`` passes (float32 sums of 64 values), the
+    block sums prefix-summed in float64, and each requested prefix completed from the nearer end of its block
+    (at most 32 rows gathered). ``data`` is read once and not copied.
+    """
+    count, width = data.shape
+    block_count = count // BLOCK_ROWS
+    block_sums = _block_sums(
+        data[: block_count * BLOCK_ROWS].reshape(block_count, BLOCK_ROWS, width)
+    )
+    prefix = np.zeros((block_count + 1, width))
+    np.cumsum(block_sums, axis=0, dtype=np.float64, out=prefix[1:])
+    block, offset = np.divmod(np.asarray(rows, dtype=np.int64), BLOCK_ROWS)
+    half = BLOCK_ROWS // 2
+    in_last_part = block >= block_count  # the rows after the last whole block
+    forward = (offset <= half) & ~in_last_part
+    backward = (offset > half) & ~in_last_part
+    result = np.empty((len(block), width))
+    result[forward] = prefix[block[forward]] + _rows_sum(
+        data, block[forward] * BLOCK_ROWS, offset[forward], half
+    )
+    result[backward] = prefix[block[backward] + 1] - _rows_sum(
+        data, block[backward] * BLOCK_ROWS + offset[backward], BLOCK_ROWS - offset[backward], half
+    )
+    result[in_last_part] = prefix[block_count] + _rows_sum(
+        data,
+        np.full(int(in_last_part.sum()), block_count * BLOCK_ROWS),
+        offset[in_last_part],
+        BLOCK_ROWS,
+    )
+    return result
 
 
 def segment_sums(data: np.ndarray, bounds: np.ndarray) -> np.ndarray:
     """Column sums of ``data`` over row spans ``[bounds[i, 0], bounds[i, 1])``, float64, shape (n_spans, n_cols).
 
-    Numpy reduces a C-ordered (n, 9) array along axis 0 nine values at a time, which is slow. Here the whole
-    blocks of :data:`BLOCK_ROWS` rows inside a span are summed through per-block sums (:func:`_block_sums`) and
-    their float64 prefix sum; the rows of each span before its first whole block and after its last (fewer than
-    a block each) are gathered and added. ``data`` is read once and not copied.
+    The difference of two prefix sums (:func:`prefix_sums_at`); neighbouring cycles share a boundary, so each
+    boundary's prefix is computed once.
     """
-    count = len(data)
-    first, stop = bounds[:, 0], bounds[:, 1]
-    block_count = count // BLOCK_ROWS
-    block_first = np.minimum(-(-first // BLOCK_ROWS), block_count)
-    block_stop = np.maximum(stop // BLOCK_ROWS, block_first)
-    has_blocks = block_stop > block_first
-    # A span holding no whole block is shorter than 2 blocks: split it into two pieces of at most one block.
-    head_stop = np.where(has_blocks, block_first * BLOCK_ROWS, np.minimum(first + BLOCK_ROWS, stop))
-    tail_first = np.where(has_blocks, block_stop * BLOCK_ROWS, head_stop)
-    sums = _partial_rows_sum(data, first, head_stop) + _partial_rows_sum(data, tail_first, stop)
-    if block_count:
-        prefix = np.zeros((block_count + 1, data.shape[1]))
-        np.cumsum(_block_sums(data, block_count), axis=0, dtype=np.float64, out=prefix[1:])
-        sums += prefix[block_stop] - prefix[block_first]
-    return sums
+    boundaries, position = np.unique(bounds.ravel(), return_inverse=True)
+    prefixes = prefix_sums_at(data, boundaries)
+    position = position.reshape(bounds.shape)
+    return prefixes[position[:, 1]] - prefixes[position[:, 0]]
 
 
 def cycle_means(samples: np.ndarray, cycles: FlapCycles, sample_rate_hz: float) -> np.ndarray:

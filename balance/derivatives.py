@@ -4,7 +4,7 @@ The clamped vehicle's cycle-averaged loads X, Z (N) and M (N m, positive nose-do
 
     L = L0 + Lu du + Lw dw + Lf df + (curvature along each sweep)
 
-by weighted least squares over every tailed measurement of the configuration, where ``du = u - u0``,
+by generalised (weighted) least squares over every tailed measurement of the configuration, where ``du = u - u0``,
 ``dw = w - w0`` are the body velocities relative to the steady state (``u = -V cos theta``,
 ``w = -V sin theta``, docs/frames.md) and ``df = f - f0``. The pitch sweep at constant V turns the velocity
 vector (mostly ``dw``), the velocity sweep stretches it (mostly ``du``): together they separate the u- and

@@ -61,6 +61,9 @@ def phase_average_figure(
                 color=colour,
                 label=f"{label} (mean of {loads.cycle_count} cycles, {loads.flapping_frequency_hz:.2f} Hz)",
             )
+            axis.axhline(
+                mean.mean(), color=colour, linestyle=":", linewidth=1.0, label=f"{label} cycle mean"
+            )
             axis.fill_between(
                 loads.phase,
                 mean - 2 * spread,
@@ -72,15 +75,17 @@ def phase_average_figure(
         axis.set_ylabel(f"{symbol} [{unit}]")
         axis.set_title(f"{symbol}: {meaning}", fontsize=10, loc="left")
         axis.grid(True, alpha=0.3)
-    axes[0].legend(fontsize=8, loc="best")
+    figure.legend(
+        *axes[0].get_legend_handles_labels(), loc="lower center", ncol=2, fontsize=8, frameon=False
+    )
     axes[-1].set_xlabel("flap phase [cycle fraction, 0 = Hall edge]")
     axes[-1].set_xlim(0.0, 1.0)
     figure.suptitle(
-        f"{configuration}: phase-averaged loads over the flap cycle\n{where}; "
-        "body frame, about the rig's reference point",
+        f"{configuration}: phase-averaged loads over the flap cycle\n{where}\n"
+        "body frame, about the rig's reference point; bands +-2 sigma over cycles",
         fontsize=11,
     )
-    figure.tight_layout()
+    figure.tight_layout(rect=(0.0, 0.07, 1.0, 1.0))
     return figure
 
 
@@ -141,62 +146,78 @@ def sweep_fit_figure(table: pd.DataFrame, fit: StabilityDerivatives) -> Figure:
             axis.set_xlabel(label)
             axis.set_ylabel(f"{symbol} [{unit}]")
             axis.grid(True, alpha=0.3)
-    if sweeps:
-        axes[0, 0].legend(fontsize=7, loc="best")
     figure.suptitle(
         f"{fit.configuration}: cycle-averaged loads against set point, with the fit\n"
         "body frame, about the rig's reference point; other variables at the steady state",
         fontsize=11,
     )
-    figure.tight_layout()
+    figure.tight_layout(rect=(0.0, 0.05, 1.0, 1.0))
+    if sweeps:
+        handles, labels = axes[0, 0].get_legend_handles_labels()
+        figure.legend(handles, labels, loc="lower center", ncol=4, fontsize=8, frameon=False)
     return figure
 
 
 def tail_comparison_figure(
     table: pd.DataFrame, contribution: pd.DataFrame, configuration: str
 ) -> Figure:
-    """Tailed against tailless at the first point measured both ways, and the difference against resolution."""
+    """Tailed against tailless at the first point measured both ways (top), the tail's share (bottom)."""
     row = contribution.iloc[0]
     at_point = table[
         np.isclose(table["theta_deg"], row["theta_deg"])
         & np.isclose(table["v_m_s"], row["v_m_s"])
         & np.isclose(table["f_set_hz"], row["f_set_hz"])
     ]
-    figure, axes = plt.subplots(1, 3, figsize=(11.0, 4.2))
-    for axis, (name, symbol, unit, meaning) in zip(axes, PLOTTED_LOADS, strict=True):
-        labels, means, bars, colours = [], [], [], []
-        for tailed, label, colour in (
-            (True, "tailed", _TAILED_COLOUR),
-            (False, "tailless", _TAILLESS_COLOUR),
+    figure, axes = plt.subplots(2, 3, figsize=(11.0, 7.0))
+    for column, (name, symbol, unit, meaning) in enumerate(PLOTTED_LOADS):
+        totals = axes[0, column]
+        for position, (tailed, colour) in enumerate(
+            ((True, _TAILED_COLOUR), (False, _TAILLESS_COLOUR))
         ):
             group = at_point[at_point["tailed"] == tailed]
-            labels.append(f"{label}\n({len(group)} repeats)")
-            means.append(group[name].mean())
-            bars.append(group[f"{name}_2sigma"].mean())
-            colours.append(colour)
-        labels.append("tail\n(difference)")
-        means.append(row[name])
-        bars.append(2 * row[f"{name}_sigma"])
-        colours.append("tab:green")
-        axis.bar(labels, means, yerr=bars, color=colours, capsize=4, alpha=0.85)
+            totals.errorbar(
+                position + 0.08 * (np.arange(len(group)) - (len(group) - 1) / 2),
+                group[name],
+                yerr=group[f"{name}_2sigma"],
+                fmt="o",
+                color=colour,
+                capsize=3,
+                markersize=5,
+            )
+        totals.set_xticks([0, 1], ["tailed", "tailless"])
+        totals.set_xlim(-0.6, 1.6)
+        totals.set_ylabel(f"{symbol} [{unit}]")
+        totals.set_title(f"{symbol}: {meaning}", fontsize=9)
+        totals.grid(True, axis="y", alpha=0.3)
+        share = axes[1, column]
+        share.errorbar(
+            [0], [row[name]], yerr=[2 * row[f"{name}_sigma"]], fmt="D", color="tab:green", capsize=5
+        )
         if name.endswith("_n"):
-            axis.axhspan(
+            share.axhspan(
                 -BALANCE_RESOLUTION_N,
                 BALANCE_RESOLUTION_N,
                 color="grey",
-                alpha=0.2,
-                label="balance resolution (0.149 gf)",
+                alpha=0.25,
+                label="+- balance resolution (0.149 gf)",
             )
-            axis.legend(fontsize=7, loc="best")
-        verdict = "resolvable" if bool(row[f"{name}_resolvable"]) else "not resolvable"
-        axis.set_title(f"{symbol}: {meaning}\ntail: {row[name]:+.5f} {unit}, {verdict}", fontsize=9)
-        axis.set_ylabel(f"{symbol} [{unit}]")
-        axis.axhline(0.0, color="k", linewidth=0.6)
-        axis.grid(True, axis="y", alpha=0.3)
+            share.legend(fontsize=7, loc="lower right")
+        share.axhline(0.0, color="k", linewidth=0.6)
+        share.set_xticks([0], ["tailed - tailless"])
+        share.set_xlim(-1, 1)
+        limit = 1.3 * max(
+            abs(row[name]) + 2 * row[f"{name}_sigma"],
+            BALANCE_RESOLUTION_N if name.endswith("_n") else 0.0,
+        )
+        share.set_ylim(-limit, limit)
+        verdict = "resolvable" if bool(row[f"{name}_resolvable"]) else "NOT resolvable"
+        share.set_title(f"tail: {row[name]:+.5f} {unit} ({verdict})", fontsize=9)
+        share.set_ylabel(f"tail contribution {symbol} [{unit}]")
+        share.grid(True, axis="y", alpha=0.3)
     figure.suptitle(
         f"{configuration}: tailed against tailless at theta {row['theta_deg']:.1f} deg, "
         f"V {row['v_m_s']:.2f} m/s, f {row['f_set_hz']:.2f} Hz\n"
-        "bars: tailed/tailless +-2 sigma over cycles; difference +-2 sigma of the mean",
+        "top: each repeat, +-2 sigma over cycles; bottom: difference of the repeat means, +-2 sigma of the mean",
         fontsize=10,
     )
     figure.tight_layout()

@@ -173,18 +173,21 @@ def measured_set_points(run_directories: Iterable[Path | str]) -> list[MeasuredS
     return measured
 
 
-def _frequency_check_record(hall_frequency_hz: float, motor_rpm: object) -> dict[str, object]:
-    """Hall against motor frequency for one point; no rpm reading gives NaN and no flag."""
-    if motor_rpm is None or not np.isfinite(float(motor_rpm)):  # type: ignore[arg-type]
+def frequency_cross_check_record(
+    hall_frequency_hz: float, motor_rpm: float | None
+) -> dict[str, float | bool]:
+    """Hall against motor flapping frequency for one point: ``motor_rpm``, ``f_motor_hz``, ``f_disagreement``
+    ((Hall - motor) / motor) and ``f_disagrees`` (beyond 2 %); no rpm reading gives NaN and no flag."""
+    if motor_rpm is None or not math.isfinite(float(motor_rpm)):
         return {
             "motor_rpm": math.nan,
             "f_motor_hz": math.nan,
             "f_disagreement": math.nan,
             "f_disagrees": False,
         }
-    check = check_flapping_frequency(hall_frequency_hz, float(motor_rpm))  # type: ignore[arg-type]
+    check = check_flapping_frequency(hall_frequency_hz, float(motor_rpm))
     return {
-        "motor_rpm": float(motor_rpm),  # type: ignore[arg-type]
+        "motor_rpm": float(motor_rpm),
         "f_motor_hz": float(check.motor_frequency_hz),
         "f_disagreement": float(check.relative_disagreement),
         "f_disagrees": bool(check.disagrees),
@@ -237,7 +240,9 @@ def table_of_points(
                 "f_set_hz": float(row["flapping_frequency_hz"]),
                 "tare_id": point.tare_id,
                 **loads.as_record(),
-                **_frequency_check_record(loads.flapping_frequency_hz, row.get("motor_rpm_mean")),
+                **frequency_cross_check_record(
+                    loads.flapping_frequency_hz, row.get("motor_rpm_mean")
+                ),
             }
         )
         if on_point is not None:
@@ -305,8 +310,9 @@ def tail_contribution(table: pd.DataFrame) -> pd.DataFrame:
     )
     result = pd.DataFrame(index=common)
     for state, label in ((True, "tailed"), (False, "tailless")):
-        result[f"repeats_{label}"] = pooled[state][BODY_LOAD_NAMES[0]].loc[common, "repeats"]
-        result[f"cycles_{label}"] = pooled[state][BODY_LOAD_NAMES[0]].loc[common, "cycles"]
+        first_load = pooled[state][BODY_LOAD_NAMES[0]].loc[common]
+        result[f"repeats_{label}"] = first_load["repeats"].astype(int)
+        result[f"cycles_{label}"] = first_load["cycles"].astype(int)
     for name in BODY_LOAD_NAMES:
         tailed, tailless = pooled[True][name].loc[common], pooled[False][name].loc[common]
         difference = tailed[name] - tailless[name]

@@ -29,6 +29,7 @@ def main() -> None:
 def _register_area_commands() -> None:
     from ornitail.acquisition.runs_cli import runs_command
     from ornitail.acquisition.sweep_cli import sweep_command
+    from ornitail.balance.process_cli import process_command
     from ornitail.calibration.cli import calibration_group
     from ornitail.core.demo import demo_command
     from ornitail.flight.campaign_cli import campaign_command
@@ -39,6 +40,7 @@ def _register_area_commands() -> None:
     main.add_command(demo_command)
     flight_group.add_command(campaign_command)
     main.add_command(flight_group)
+    main.add_command(process_command)
     main.add_command(runs_command)
     main.add_command(sim_group)
     main.add_command(sweep_command)

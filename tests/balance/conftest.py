@@ -24,7 +24,7 @@ from ornitail.sim.tunnel import TunnelSignalSource, true_cycle_average
 CALIBRATION_PATH = files("ornitail.calibration") / "data" / "FT8884.cal"
 SHIPPED_PLAN_PATH = files("ornitail.acquisition") / "data" / "study_tunnel_plan.toml"
 SAMPLE_RATE_HZ = 10_000.0
-SETTLE_SAMPLES = 2_000  # 0.2 s after each change, discarded (the rig waits for settling too)
+SETTLE_SAMPLES = 1_000  # 0.1 s after each change, discarded (the rig waits for settling too)
 
 
 @dataclass(frozen=True)

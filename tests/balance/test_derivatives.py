@@ -1,0 +1,218 @@
+"""Stability derivatives: exact recovery by construction, interval coverage against the simulator's truth."""
+
+import math
+import tomllib
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from ornitail.acquisition.sweep_plan import plan_from_document
+from ornitail.balance.derivatives import (
+    DERIVATIVE_NAMES,
+    NOT_MEASURABLE_CLAMPED,
+    body_velocities,
+    fit_stability_derivatives,
+)
+from ornitail.core.errors import UserInputError
+from ornitail.sim.effects import EffectSet
+
+FITTED_NAMES = ("X0", "Z0", "M0", *DERIVATIVE_NAMES)
+THETA0_DEG, V0_M_S, F0_HZ = 25.0, 0.8, 13.5
+
+
+def shipped_plan_with(record_s):
+    """The shipped study plan with shorter records (the coverage argument does not depend on record length)."""
+    from importlib.resources import files
+
+    document = tomllib.loads(
+        (files("ornitail.acquisition") / "data" / "study_tunnel_plan.toml").read_text()
+    )
+    document["protocol"]["record_s"] = record_s
+    return plan_from_document(document)
+
+
+def one_variable_sweep_points():
+    """Set points of the study's protocol: steady state x3 and +-2 offsets of theta, V and f (tailed)."""
+    rows = [("steady_state", THETA0_DEG, V0_M_S, F0_HZ)] * 3
+    rows += [("theta", THETA0_DEG + d, V0_M_S, F0_HZ) for d in (-5, -2.5, 2.5, 5)]
+    rows += [("velocity", THETA0_DEG, V0_M_S + d, F0_HZ) for d in (-0.25, -0.125, 0.125, 0.25)]
+    rows += [("frequency", THETA0_DEG, V0_M_S, F0_HZ + d) for d in (-1.4, -0.7, 0.7, 1.4)]
+    return pd.DataFrame(rows, columns=["sweep", "theta_deg", "v_m_s", "f_set_hz"]).assign(
+        tailed=True
+    )
+
+
+def with_loads(points, loads_of, se=1e-6, tare_se=0.0):
+    """Give each point X, Z, M from ``loads_of(du, dw, df)`` and standard errors."""
+    u, w = body_velocities(np.radians(points["theta_deg"]), points["v_m_s"])
+    u0, w0 = body_velocities(math.radians(THETA0_DEG), V0_M_S)
+    loads = loads_of(u - u0, w - w0, points["f_set_hz"].to_numpy() - F0_HZ)
+    table = points.copy()
+    for column, values in zip(("x_n", "z_n", "m_n_m"), loads, strict=True):
+        table[column] = values
+        table[f"{column}_se"] = se
+        table[f"{column}_tare_se"] = tare_se
+    return table
+
+
+def test_linear_loads_with_curvature_along_the_sweeps_are_recovered_exactly():
+    cos0, sin0 = math.cos(math.radians(THETA0_DEG)), math.sin(math.radians(THETA0_DEG))
+
+    def loads(du, dw, df):
+        along, across = -(du * cos0 + dw * sin0), du * sin0 - dw * cos0
+        curvature = 0.3 * along**2 - 0.8 * across**3 + 0.002 * df**2 + 1e-4 * df**3
+        return (
+            0.1 - 0.13 * du - 0.04 * dw + 0.006 * df + curvature,
+            -0.2 + 0.05 * du - 0.01 * dw - 0.03 * df + 0.5 * curvature,
+            -5e-4 + 4e-3 * du + 1e-3 * dw + 3e-4 * df - 0.1 * curvature,
+        )
+
+    fit = fit_stability_derivatives(with_loads(one_variable_sweep_points(), loads))
+    expected = {
+        "X0": 0.1, "Xu": -0.13, "Xw": -0.04, "Xf": 0.006,
+        "Z0": -0.2, "Zu": 0.05, "Zw": -0.01, "Zf": -0.03,
+        "M0": -5e-4, "Mu": 4e-3, "Mw": 1e-3, "Mf": 3e-4,
+    }  # fmt: skip
+    # The model contains the loads exactly: only rounding remains (values ~0.1, condition of the design ~1e3).
+    for name, value in expected.items():
+        assert getattr(fit, name) == pytest.approx(value, abs=1e-9), name
+    diagnostics = fit.diagnostics["X"]
+    assert diagnostics.degrees_of_freedom == 15 - 10
+    assert diagnostics.reduced_chi_square < 1e-6
+    assert diagnostics.standard_error_inflation == 1.0
+    # The hat matrix of a full-rank fit has trace = number of coefficients.
+    assert diagnostics.leverage.sum() == pytest.approx(10, rel=1e-9)
+    assert np.all((diagnostics.leverage > 0) & (diagnostics.leverage <= 1 + 1e-12))
+    # Variance inflation of du and dw is 1 / (1 - r^2) with r their correlation over the points; f is
+    # orthogonal to both (its sweep alone moves it, symmetrically). Moderate (< 10): the sweeps separate u, w.
+    du, dw = fit.points["du_m_s"], fit.points["dw_m_s"]
+    r = np.corrcoef(du, dw)[0, 1]
+    assert fit.variance_inflation["u"] == pytest.approx(1 / (1 - r**2), rel=1e-9)
+    assert fit.variance_inflation["f"] == pytest.approx(1.0, rel=1e-9)
+    assert 1.0 < fit.variance_inflation["w"] < 10.0
+    assert 1.0 <= fit.condition_number < 10.0
+
+
+def test_scatter_beyond_the_stated_errors_inflates_sigma_and_says_so():
+    points = one_variable_sweep_points()
+    scatter = np.random.default_rng(4).normal(0.0, 3e-5, len(points))
+
+    def loads(du, dw, df):
+        return 0.1 - 0.13 * du + scatter, -0.2 + 0 * du + scatter, 1e-4 * df + scatter
+
+    stated = fit_stability_derivatives(with_loads(points, loads, se=1e-5), max_sweep_order=1)
+    diagnostics = stated.diagnostics["X"]
+    # Scatter 3x the stated 1e-5: chi2_red ~ 9 (chi-square on 11 dof: between 3 and 20 with >99 % probability).
+    assert 3.0 < diagnostics.reduced_chi_square < 20.0
+    assert diagnostics.standard_error_inflation == pytest.approx(
+        math.sqrt(diagnostics.reduced_chi_square)
+    )
+    honest = fit_stability_derivatives(with_loads(points, loads, se=3e-5), max_sweep_order=1)
+    # Inflation makes sigma what it would have been with honest errors, times the chi-square's own scatter.
+    assert stated.sigma["Xu"] == pytest.approx(
+        honest.sigma["Xu"] * math.sqrt(honest.diagnostics["X"].reduced_chi_square), rel=1e-9
+    )
+    assert any(
+        "inflated by sqrt(chi2_red)" in line and line.startswith("X:") for line in stated.statements
+    )
+
+
+def test_missing_sweeps_are_reported_as_not_estimable_and_q_derivatives_always():
+    points = one_variable_sweep_points()
+    only_velocity = points[points["sweep"].isin(["steady_state", "velocity"])]
+    fit = fit_stability_derivatives(
+        with_loads(only_velocity, lambda du, dw, df: (0.1 + du, -0.2 + dw, 0 * du))
+    )
+    for name in ("Xu", "Xw", "Zu", "Zw", "Mu", "Mw", "Xf", "Zf", "Mf"):
+        assert math.isnan(getattr(fit, name)) and name in fit.not_estimable
+    assert "one direction only" in fit.not_estimable["Xu"]
+    assert "no frequency sweep" in fit.not_estimable["Xf"]
+    for name in NOT_MEASURABLE_CLAMPED:
+        assert "clamped" in fit.not_estimable[name]
+    table = fit.table()
+    assert set(NOT_MEASURABLE_CLAMPED) <= set(table["name"])
+    assert table.set_index("name").loc["Mq", "unit"] == "N m/(rad/s)"
+    assert any("Xq, Zq and Mq" in line for line in fit.statements)
+
+
+def test_no_tailed_points_or_no_steady_state_is_refused():
+    points = with_loads(one_variable_sweep_points(), lambda du, dw, df: (du, dw, df))
+    with pytest.raises(UserInputError, match="no tailed measurements"):
+        fit_stability_derivatives(points.assign(tailed=False))
+    with pytest.raises(UserInputError, match="no steady-state point"):
+        fit_stability_derivatives(points[points["sweep"] != "steady_state"])
+
+
+def test_table_names_and_units_match_the_free_flight_models():
+    fit = fit_stability_derivatives(
+        with_loads(one_variable_sweep_points(), lambda du, dw, df: (du, dw, df))
+    )
+    units = fit.table().set_index("name")["unit"]
+    assert units["Xu"] == units["Zw"] == "N/(m/s)"
+    assert units["Mu"] == units["Mw"] == "N m/(m/s)"
+    assert units["Xf"] == "N/Hz" and units["Mf"] == "N m/Hz"
+    record = fit.to_json_dict()
+    assert record["derivatives"]["Xu"]["unit"] == "N/(m/s)"
+    assert (
+        "study body frame" in record["frame"]
+        and "tool-transform point" in record["reference_point"]
+    )
+
+
+def coverage_z_scores(sweep, seeds):
+    truth = sweep.true_derivatives()
+    scores = []
+    for seed in seeds:
+        fit = fit_stability_derivatives(sweep.table(seed))
+        scores.append(
+            [(getattr(fit, name) - truth[name]) / fit.sigma[name] for name in FITTED_NAMES]
+        )
+    return np.array(scores)
+
+
+def test_derivative_intervals_cover_the_simulator_truth_over_many_seeds(make_simulated_sweep):
+    """Shipped plan (0.6 s records), balance noise only: +-2 sigma intervals of all 12 values over 30 sweeps."""
+    sweep = make_simulated_sweep(
+        plan=shipped_plan_with(0.6), effects=EffectSet.none().with_enabled("balance_resolution")
+    )
+    scores = coverage_z_scores(sweep, range(30))
+    covered = np.abs(scores) <= 2.0
+    # Nominal coverage >= 0.954 (more where chi2 inflation is conservative). Over 360 intervals the binomial sd
+    # at 0.954 is 0.011, so 0.92 is 3 sd below it; per value (30 sweeps, sd 0.038) 0.8 is 4 sd below.
+    assert covered.mean() >= 0.92
+    assert covered.mean(axis=0).min() >= 0.8
+    # Sigma is not too small: the rms of the z-scores of each value stays below 1.5 (sd of an rms of 30 unit
+    # normals is ~0.13, so 1.5 is 4 sd above 1). Nor absurdly large: the pooled rms stays above 0.35 (the
+    # inflated M sigmas are conservative, the simulator's M being not quite cubic along the sweeps).
+    rms = np.sqrt((scores**2).mean(axis=0))
+    assert rms.max() <= 1.5
+    assert np.sqrt((scores**2).mean()) >= 0.35
+
+
+def test_thermal_drift_is_a_systematic_the_fit_cannot_see(make_simulated_sweep):
+    """The gauges warm while the motor runs; the wind-off tare at each pitch is taken before that pitch's points,
+    so later points carry an offset the tare does not remove. The fit cannot tell it from the loads: the
+    steady-state loads come out biased beyond their sigma (the derivatives partly hide it in inflated sigmas).
+    A 30 s warm-up time constant (instead of 180 s) makes a short simulated sweep warm up as a real one does."""
+    drifting = EffectSet.none().with_enabled("balance_resolution", "balance_thermal_drift")
+    drifting = drifting.replace_effect("balance_thermal_drift", warm_up_time_constant_s=30.0)
+    plan = shipped_plan_with(0.6)
+    seeds = range(6)
+    with_drift = coverage_z_scores(make_simulated_sweep(plan=plan, effects=drifting), seeds)
+    without_drift = coverage_z_scores(
+        make_simulated_sweep(
+            plan=plan, effects=EffectSet.none().with_enabled("balance_resolution")
+        ),
+        seeds,
+    )
+    steady_state = slice(0, 3)  # X0, Z0, M0
+    coverage_with = (np.abs(with_drift[:, steady_state]) <= 2).mean()
+    coverage_without = (np.abs(without_drift[:, steady_state]) <= 2).mean()
+    # Without drift the 18 steady-state intervals cover at ~95 % (>= 0.75 is 4 binomial sd below); with
+    # drift the offsets of several sigma leave most uncovered.
+    assert coverage_without >= 0.75
+    assert coverage_with <= 0.6
+    assert np.median(np.abs(with_drift[:, steady_state])) > 2 * np.median(
+        np.abs(without_drift[:, steady_state])
+    )
