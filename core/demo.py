@@ -1,9 +1,9 @@
 """``ornitail demo``: the main job on the simulated rig, end to end.
 
 Runs the study's tunnel protocol (the shipped plan) on the shipped simulated rig, faster than real time: wind-off
-tares, the tailed steady state and sweeps, the tailless steady state; then cycle-averages every record and prints
-the steady-state loads with and without tail, their 2-sigma spread over cycles and the tail's contribution. The
-per-point table is written as CSV next to the runs.
+tares, the tailed steady state and sweeps, the tailless steady state; then processes the runs as ``ornitail process``
+does (cycle averages, tail contribution, stability derivatives, plots) and prints the steady-state loads with and
+without tail, their 2-sigma spread over cycles, the tail's contribution and the derivatives with their sigma.
 """
 
 from __future__ import annotations
@@ -25,7 +25,8 @@ from ornitail.acquisition.sweep_cli import (
     sweep_result_record,
 )
 from ornitail.balance.point_loads import BODY_LOAD_NAMES
-from ornitail.balance.sweep_table import cycle_averaged_table, tail_contribution
+from ornitail.balance.process_runs import process_runs
+from ornitail.balance.sweep_table import tail_contribution
 from ornitail.core.output import emit, json_option
 
 DEMO_TIME_SCALE = 4.0
@@ -81,8 +82,19 @@ def _render(result: dict[str, Any]) -> str:
             "resolvable above the balance resolution and scatter: "
             + (", ".join(resolvable) if resolvable else "none")
         )
-    if result.get("table_csv"):
-        lines.append(f"\nEvery point: {result['table_csv']}")
+    derivatives = result.get("derivatives", {})
+    if derivatives:
+        lines.append("")
+        lines.append(
+            "Stability derivatives from the sweeps (tunnel, clamped: no q-derivatives), value +- 1 sigma:"
+        )
+        for name, entry in derivatives.items():
+            if isinstance(entry, dict) and "value" in entry and name[-1] in "uwf":
+                lines.append(
+                    f"  {name:3s} {entry['value']:+.4g} +- {entry['sigma']:.2g} {entry.get('unit', '')}"
+                )
+    if result.get("processed_folder"):
+        lines.append(f"\nTables and plots: {result['processed_folder']}")
     return "\n".join(lines)
 
 
@@ -113,18 +125,16 @@ def demo_command(data_root: Path | None, time_scale: float, as_json: bool) -> No
         )
     result: dict[str, Any] = {"sweep": sweep_result_record(sweep)}
     if sweep.status == "completed":
-        table = cycle_averaged_table(sweep.run_directories)
-        table_csv = (
-            Path(data_root)
-            / "processed"
-            / f"{Path(sweep.run_directories[-1]).name}-cycle-averages.csv"
-        )
-        table_csv.parent.mkdir(parents=True, exist_ok=True)
-        table.to_csv(table_csv, index=False)
+        folder = Path(data_root) / "processed" / Path(sweep.run_directories[-1]).name
+        processed = process_runs(sweep.run_directories, folder)
+        table = pd.read_csv(processed["table_csv"])
         result["steady_state"] = _steady_state_summary(table)
         contribution = tail_contribution(table)
         if len(contribution):
             result["tail_contribution"] = contribution.iloc[0].to_dict()
-        result["table_csv"] = str(table_csv)
+        derivatives = processed["configurations"][0].get("derivatives", {})
+        result["derivatives"] = derivatives.get("derivatives", {})
+        result["table_csv"] = processed["table_csv"]
+        result["processed_folder"] = str(folder)
     emit(result, as_json, _render)
     sys.exit(exit_code_of(sweep))
