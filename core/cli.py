@@ -32,12 +32,14 @@ def _register_area_commands() -> None:
     from ornitail.balance.process_cli import process_command
     from ornitail.calibration.cli import calibration_group
     from ornitail.core.demo import demo_command
+    from ornitail.design.cli import design_group
     from ornitail.flight.campaign_cli import campaign_command
     from ornitail.flight.cli import flight_group
     from ornitail.sim.cli import sim_group
 
     main.add_command(calibration_group)
     main.add_command(demo_command)
+    main.add_command(design_group)
     flight_group.add_command(campaign_command)
     main.add_command(flight_group)
     main.add_command(process_command)

@@ -11,15 +11,15 @@ import click
 import numpy as np
 
 
-def _to_jsonable(value: Any) -> Any:
+def to_jsonable(value: Any) -> Any:
     if isinstance(value, dict):
-        return {str(key): _to_jsonable(item) for key, item in value.items()}
+        return {str(key): to_jsonable(item) for key, item in value.items()}
     if isinstance(value, list | tuple):
-        return [_to_jsonable(item) for item in value]
+        return [to_jsonable(item) for item in value]
     if isinstance(value, np.ndarray):
-        return _to_jsonable(value.tolist())
+        return to_jsonable(value.tolist())
     if isinstance(value, np.generic):
-        return _to_jsonable(value.item())
+        return to_jsonable(value.item())
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
@@ -30,7 +30,7 @@ def emit(
 ) -> None:
     """Print ``result`` as exactly one JSON object (``as_json``) or as the text ``render_text`` makes."""
     if as_json:
-        click.echo(json.dumps(_to_jsonable(result)))
+        click.echo(json.dumps(to_jsonable(result)))
     else:
         click.echo(render_text(result))
 

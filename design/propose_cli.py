@@ -1,0 +1,386 @@
+"""``ornitail design propose``: a tail geometry for steady-state and damping targets (design/proposal.py)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import click
+
+from ornitail.core.errors import UserInputError, require_finite
+from ornitail.core.output import emit, json_option
+from ornitail.design.design_evaluation import IntervalEstimate, PredictedQuantity
+from ornitail.design.drawing import write_proposal_drawings
+from ornitail.design.proposal import (
+    INTERVAL_KINDS,
+    OBJECTIVES,
+    DesignTargets,
+    Proposal,
+    TargetBand,
+    propose,
+)
+from ornitail.design.trend_basis import BASES
+from ornitail.design.trends import TrendModel, fit_trends
+from ornitail.design.trends_cli import gather_observations
+
+_UNMET_UNITS = {
+    "theta_ss": ("deg", math.degrees(1.0)),
+    "v_ss": ("m/s", 1.0),
+    "f_ss": ("Hz", 1.0),
+    "damping_ratio": ("", 1.0),
+    "natural_frequency": ("rad/s", 1.0),
+}
+
+
+def trend_source_options(function: Any) -> Any:
+    """The trend-source options shared by ``propose`` and ``pareto``."""
+    for option in reversed(
+        [
+            click.option("--study", is_flag=True, help="The study's published tables (default)."),
+            click.option(
+                "--campaign",
+                "campaigns",
+                multiple=True,
+                type=click.Path(),
+                help="representative_models.csv/json of `ornitail flight campaign`.",
+            ),
+            click.option(
+                "--tunnel",
+                "tunnels",
+                multiple=True,
+                type=click.Path(),
+                help="Derivatives CSV/JSON of `ornitail process`.",
+            ),
+            click.option(
+                "--user-csv",
+                "user_csvs",
+                multiple=True,
+                type=click.Path(),
+                help="A user CSV of observations (docs/design-trends.md).",
+            ),
+            click.option(
+                "--basis",
+                type=click.Choice(sorted(BASES)),
+                default="linear",
+                show_default=True,
+                help="Trend basis.",
+            ),
+        ]
+    ):
+        function = option(function)
+    return function
+
+
+def trend_model_from_options(
+    study: bool, campaigns: tuple, tunnels: tuple, user_csvs: tuple, basis: str
+) -> TrendModel:
+    """Fit the trends of the chosen sources; the study tables when none is chosen."""
+    if not (study or campaigns or tunnels or user_csvs):
+        study = True
+    return fit_trends(gather_observations(study, campaigns, tunnels, user_csvs), basis=basis)
+
+
+def _band(where: str, value: float | None, tolerance: float, scale: float) -> TargetBand | None:
+    if value is None:
+        return None
+    require_finite(where, [value, tolerance])
+    if tolerance < 0:
+        raise UserInputError(where, f"tolerance {tolerance!r} must be >= 0")
+    return TargetBand.around(value * scale, tolerance * scale)
+
+
+def targets_from_options(
+    theta_ss_deg: float | None,
+    theta_tol_deg: float,
+    v_ss_m_s: float | None,
+    v_tol_m_s: float,
+    f_ss_hz: float | None,
+    f_tol_hz: float,
+    zeta: float | None,
+    omega_rad_s: float | None,
+    omega_tol_rad_s: float,
+) -> DesignTargets:
+    """Targets in SI from the command-line values (degrees converted to radians)."""
+    if zeta is not None:
+        require_finite("--zeta", zeta)
+        if not 0.0 < zeta < 0.99:
+            raise UserInputError(
+                "--zeta", f"value {zeta!r} must lie in (0, 0.99): an oscillatory mode"
+            )
+    if theta_ss_deg is not None and not 0.0 < theta_ss_deg < 90.0:
+        raise UserInputError(
+            "--theta-ss-deg", f"value {theta_ss_deg!r} must lie in (0, 90) degrees"
+        )
+    for where, value in (
+        ("--v-ss-m-s", v_ss_m_s),
+        ("--f-ss-hz", f_ss_hz),
+        ("--omega-rad-s", omega_rad_s),
+    ):
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise UserInputError(where, f"value {value!r} must be a positive finite number")
+    return DesignTargets(
+        theta_ss_rad=_band("--theta-ss-deg", theta_ss_deg, theta_tol_deg, math.radians(1.0)),
+        v_ss_m_s=_band("--v-ss-m-s", v_ss_m_s, v_tol_m_s, 1.0),
+        f_ss_hz=_band("--f-ss-hz", f_ss_hz, f_tol_hz, 1.0),
+        damping_ratio_min=zeta,
+        natural_frequency_rad_s=_band("--omega-rad-s", omega_rad_s, omega_tol_rad_s, 1.0),
+    )
+
+
+def _interval_dict(
+    estimate: IntervalEstimate | PredictedQuantity, scale: float = 1.0
+) -> dict[str, Any]:
+    value, sigma_mean, sigma_new = estimate.value, estimate.sigma_mean, estimate.sigma_new
+    z = 1.959963984540054
+    result = {
+        "value": value * scale,
+        "sigma_mean": sigma_mean * scale,
+        "sigma_new": sigma_new * scale,
+        "interval_95_mean": [(value - z * sigma_mean) * scale, (value + z * sigma_mean) * scale],
+        "interval_95_new": [(value - z * sigma_new) * scale, (value + z * sigma_new) * scale],
+    }
+    if isinstance(estimate, PredictedQuantity):
+        result["extrapolation_mahalanobis"] = estimate.extrapolation
+        result["sources"] = list(estimate.sources)
+    return result
+
+
+def proposal_result(proposal: Proposal, trend_model: TrendModel) -> dict[str, Any]:
+    """The proposal as a plain dict with user-facing units (mm, cm^2, deg) in the field names."""
+    evaluation = proposal.evaluation
+    geometry = proposal.geometry
+    quantities = evaluation.quantities
+    steady = {
+        "theta_ss_deg": _interval_dict(quantities["theta_ss_rad"], math.degrees(1.0)),
+        "v_ss_m_s": _interval_dict(quantities["v_ss_m_s"]),
+    }
+    if "f_ss_hz" in quantities:
+        steady["f_ss_hz"] = _interval_dict(quantities["f_ss_hz"])
+    return {
+        "objective": proposal.objective,
+        "solver_status": proposal.solver_status,
+        "targets_met": proposal.targets_met,
+        "unmet_targets": {
+            f"{name}_miss{('_' + _UNMET_UNITS[name][0].replace('/', '_')) if _UNMET_UNITS[name][0] else ''}": miss
+            * _UNMET_UNITS[name][1]
+            for name, miss in proposal.unmet_targets.items()
+        },
+        "binding_constraints": proposal.binding_constraints,
+        "geometry": {
+            "b_mm": geometry.span_m * 1e3,
+            "b_le_mm": geometry.leading_edge_span_m * 1e3,
+            "c_r_mm": geometry.root_chord_m * 1e3,
+            "c_t_mm": geometry.tip_chord_m * 1e3,
+            "valid": geometry.validation_problems() == [],
+        },
+        "x_h_mm": proposal.x_h_m * 1e3,
+        "s_cm2": proposal.area_m2 * 1e4,
+        "ar": proposal.aspect_ratio,
+        "steady_state": steady,
+        "poles": [
+            {"real": float(p.real), "imag": float(p.imag)} for p in evaluation.modes.eigenvalues
+        ],
+        "oscillatory_mode": {
+            "damping_ratio": _interval_dict(evaluation.damping_ratio),
+            "natural_frequency_rad_s": _interval_dict(evaluation.natural_frequency_rad_s),
+            "damping_ratio_in_problem": proposal.damping_ratio_in_problem,
+            "sigma_damping_ratio_in_problem": proposal.sigma_damping_ratio_in_problem,
+            "interval_kinds": "mean: uncertainty of the mean trend; new: one new flight of the built tail",
+        },
+        "robust": {"k": proposal.robust_k, "interval": proposal.interval_kind},
+        "mass_kg": quantities["mass_kg"].value,
+        "iyy_kg_m2": quantities["iyy_kg_m2"].value,
+        "mass_source": list(quantities["mass_kg"].sources),
+        "max_extrapolation_mahalanobis": evaluation.max_extrapolation,
+        "trend_sources": sorted({s for t in trend_model.trends.values() for s in t.sources}),
+        "starts_tried": proposal.starts_tried,
+        "starts_converged": proposal.starts_converged,
+        "per_position": [
+            {
+                **{k: v for k, v in item.items() if k not in ("x_h_m", "area_m2")},
+                "x_h_mm": None if item["x_h_m"] is None else item["x_h_m"] * 1e3,
+                "s_cm2": None if item["area_m2"] is None else item["area_m2"] * 1e4,
+            }
+            for item in proposal.per_position
+        ],
+        "solve_time_s": proposal.solve_time_s,
+    }
+
+
+def _format_interval(name: str, item: dict[str, Any], unit: str) -> str:
+    low, high = item["interval_95_new"]
+    low_mean, high_mean = item["interval_95_mean"]
+    return (
+        f"  {name:24s} {item['value']:.4g} {unit}  95 % mean trend [{low_mean:.4g}, {high_mean:.4g}]"
+        f"  new flight [{low:.4g}, {high:.4g}]"
+    )
+
+
+def render_proposal(result: dict[str, Any]) -> str:
+    """Readable text of :func:`proposal_result`."""
+    g = result["geometry"]
+    lines = [
+        f"status: {result['solver_status']} ({result['starts_converged']}/{result['starts_tried']} starts converged)",
+        f"tail: b {g['b_mm']:.1f} mm, b_LE {g['b_le_mm']:.1f} mm, c_r {g['c_r_mm']:.1f} mm, "
+        f"c_t {g['c_t_mm']:.1f} mm at x_h {result['x_h_mm']:.1f} mm",
+        f"S = {result['s_cm2']:.1f} cm^2, AR = {result['ar']:.2f}",
+        "steady state:",
+    ]
+    units = {"theta_ss_deg": "deg", "v_ss_m_s": "m/s", "f_ss_hz": "Hz"}
+    for name, item in result["steady_state"].items():
+        lines.append(_format_interval(name, item, units[name]))
+    mode = result["oscillatory_mode"]
+    lines.append("oscillatory pitch mode:")
+    lines.append(_format_interval("damping ratio", mode["damping_ratio"], ""))
+    lines.append(_format_interval("natural frequency", mode["natural_frequency_rad_s"], "rad/s"))
+    poles = ", ".join(f"{p['real']:.3f}{p['imag']:+.3f}j" for p in result["poles"])
+    lines.append(f"poles (1/s): {poles}")
+    if result["unmet_targets"]:
+        lines.append(
+            "unmet targets: "
+            + ", ".join(f"{k} = {v:.4g}" for k, v in result["unmet_targets"].items())
+        )
+    lines.append("binding constraints: " + ("; ".join(result["binding_constraints"]) or "none"))
+    lines.append(
+        f"largest extrapolation (Mahalanobis): {result['max_extrapolation_mahalanobis']:.3g}"
+    )
+    for name, path in result.get("files", {}).items():
+        lines.append(f"{name}: {path}")
+    return "\n".join(lines)
+
+
+@click.command("propose")
+@click.option(
+    "--theta-ss-deg", type=float, default=None, help="Target steady pitch attitude (deg)."
+)
+@click.option(
+    "--theta-tol-deg",
+    type=float,
+    default=0.0,
+    show_default=True,
+    help="Half-width of the theta band (deg).",
+)
+@click.option("--v-ss-m-s", type=float, default=None, help="Target steady airspeed (m/s).")
+@click.option(
+    "--v-tol-m-s",
+    type=float,
+    default=0.0,
+    show_default=True,
+    help="Half-width of the V band (m/s).",
+)
+@click.option("--f-ss-hz", type=float, default=None, help="Target flapping frequency (Hz).")
+@click.option(
+    "--f-tol-hz", type=float, default=0.0, show_default=True, help="Half-width of the f band (Hz)."
+)
+@click.option(
+    "--zeta", type=float, default=None, help="Minimum damping ratio of the oscillatory pitch mode."
+)
+@click.option(
+    "--omega-rad-s", type=float, default=None, help="Target natural frequency of that mode (rad/s)."
+)
+@click.option(
+    "--omega-tol-rad-s",
+    type=float,
+    default=0.0,
+    show_default=True,
+    help="Half-width of the omega band.",
+)
+@click.option("--objective", type=click.Choice(OBJECTIVES), default="min-area", show_default=True)
+@click.option(
+    "--robust-k",
+    type=float,
+    default=0.0,
+    show_default=True,
+    help="Constrain zeta - k sigma_zeta >= --zeta (delta method).",
+)
+@click.option(
+    "--robust-interval",
+    type=click.Choice(INTERVAL_KINDS),
+    default="new",
+    show_default=True,
+    help="sigma_zeta of the mean trend or of a new flight.",
+)
+@click.option("--x-h-mm", type=float, default=None, help="Use this tail position only (mm).")
+@click.option("--continuous-x-h", is_flag=True, help="Treat x_h as continuous (57-126 mm).")
+@click.option(
+    "--starts",
+    "start_count",
+    type=int,
+    default=8,
+    show_default=True,
+    help="Sobol starts per position.",
+)
+@trend_source_options
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(file_okay=False),
+    default="proposal",
+    show_default=True,
+    help="Directory for planform.svg/png and cut_1to1.svg.",
+)
+@json_option
+def propose_command(
+    theta_ss_deg,
+    theta_tol_deg,
+    v_ss_m_s,
+    v_tol_m_s,
+    f_ss_hz,
+    f_tol_hz,
+    zeta,
+    omega_rad_s,
+    omega_tol_rad_s,
+    objective,
+    robust_k,
+    robust_interval,
+    x_h_mm,
+    continuous_x_h,
+    start_count,
+    study,
+    campaigns,
+    tunnels,
+    user_csvs,
+    basis,
+    out_dir,
+    as_json,
+) -> None:
+    """Propose a tail (b, b_LE, c_r, c_t, x_h) meeting steady-state and pitch-damping targets."""
+    targets = targets_from_options(
+        theta_ss_deg,
+        theta_tol_deg,
+        v_ss_m_s,
+        v_tol_m_s,
+        f_ss_hz,
+        f_tol_hz,
+        zeta,
+        omega_rad_s,
+        omega_tol_rad_s,
+    )
+    if all(band is None for band in targets.bands()) and objective != "max-damping":
+        raise UserInputError(
+            "targets",
+            "give at least one target (--theta-ss-deg, --v-ss-m-s, --f-ss-hz, --zeta, --omega-rad-s)",
+        )
+    if x_h_mm is not None and continuous_x_h:
+        raise UserInputError("--x-h-mm", "give either --x-h-mm or --continuous-x-h, not both")
+    if x_h_mm is not None:
+        require_finite("--x-h-mm", x_h_mm)
+    trend_model = trend_model_from_options(study, campaigns, tunnels, user_csvs, basis)
+    proposal = propose(
+        trend_model,
+        targets,
+        objective=objective,
+        robust_k=robust_k,
+        interval_kind=robust_interval,
+        x_h_m=None if x_h_mm is None else x_h_mm / 1e3,
+        continuous_x_h=continuous_x_h,
+        start_count=start_count,
+    )
+    result = proposal_result(proposal, trend_model)
+    title = (
+        f"S {result['s_cm2']:.1f} cm^2, AR {result['ar']:.2f}, x_h {result['x_h_mm']:.0f} mm, "
+        f"zeta {proposal.evaluation.damping_ratio.value:.2f}"
+    )
+    result["files"] = write_proposal_drawings(proposal.geometry, title, Path(out_dir))
+    emit(result, as_json, render_proposal)

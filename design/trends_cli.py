@@ -1,0 +1,149 @@
+"""``ornitail design trends``: fit trends from the chosen sources, print them, optionally predict a geometry."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import click
+
+from ornitail.core.errors import UserInputError, require_finite
+from ornitail.core.output import emit, json_option, to_jsonable
+from ornitail.design.geometry import TailGeometry
+from ornitail.design.trend_basis import BASES
+from ornitail.design.trend_data import (
+    TrendObservation,
+    observations_from_campaign,
+    observations_from_study_tables,
+    observations_from_tunnel,
+    observations_from_user_csv,
+)
+from ornitail.design.trends import fit_trends
+
+_PREDICT_OPTIONS = ("predict_b", "predict_b_le", "predict_c_r", "predict_c_t", "predict_x_h_mm")
+
+
+def gather_observations(
+    study: bool, campaigns: tuple[str, ...], tunnels: tuple[str, ...], user_csvs: tuple[str, ...]
+) -> list[TrendObservation]:
+    """Every observation of the chosen sources; at least one source must be chosen."""
+    if not (study or campaigns or tunnels or user_csvs):
+        raise UserInputError(
+            "sources", "give at least one of --study, --campaign, --tunnel, --user-csv"
+        )
+    observations = observations_from_study_tables() if study else []
+    for path in campaigns:
+        observations += observations_from_campaign(path)
+    for path in tunnels:
+        observations += observations_from_tunnel(path)
+    for path in user_csvs:
+        observations += observations_from_user_csv(path)
+    return observations
+
+
+def _prediction_vector(options: dict[str, float | None]) -> tuple[float, ...] | None:
+    given = {name: options[name] for name in _PREDICT_OPTIONS if options[name] is not None}
+    if not given:
+        return None
+    missing = [f"--{name.replace('_', '-')}" for name in _PREDICT_OPTIONS if name not in given]
+    if missing:
+        raise UserInputError("--predict-*", f"a prediction needs {', '.join(missing)} too")
+    require_finite("--predict-*", list(given.values()))
+    TailGeometry.from_mm(
+        given["predict_b"], given["predict_b_le"], given["predict_c_r"], given["predict_c_t"]
+    ).validate("--predict-b/--predict-b-le/--predict-c-r/--predict-c-t")
+    return tuple(given[name] / 1000.0 for name in _PREDICT_OPTIONS)
+
+
+def _render(result: dict[str, Any]) -> str:
+    lines = []
+    for name, trend in result["trends"].items():
+        coefficients = "  ".join(
+            f"{feature} {item['value']:+.4g}+-{item['sigma']:.2g}"
+            for feature, item in trend["coefficients"].items()
+        )
+        lines.append(
+            f"{name:13s} {trend['weighting'].upper()} n={trend['observation_count']} "
+            f"dof={trend['degrees_of_freedom']} residual sigma {trend['residual_sigma']:.3g} "
+            f"LOO RMSE {trend['loo_rmse']:.3g}  [{', '.join(trend['sources'])}]"
+        )
+        lines.append(f"{'':13s} {coefficients}")
+        if trend["fixed_features"]:
+            fixed = ", ".join(f"{k} = {v:.4g}" for k, v in trend["fixed_features"].items())
+            lines.append(f"{'':13s} constant in the data, not fitted: {fixed}")
+    for name, reason in result["unfitted"].items():
+        lines.append(f"{name:13s} not fitted: {reason}")
+    if result.get("prediction"):
+        lines.append("prediction (value, 1 sigma mean trend, 1 sigma new flight, extrapolation):")
+        for name, item in result["prediction"]["quantities"].items():
+            lines.append(
+                f"  {name:13s} {item['value']:+.5g}  +-{item['sigma_mean']:.3g}  +-{item['sigma_new']:.3g}"
+                f"  Mahalanobis {item['extrapolation_mahalanobis']:.2f}  {item['extrapolation_note']}"
+            )
+    lines += [f"wrote {path}" for path in result["written"]]
+    return "\n".join(lines)
+
+
+@click.command("trends")
+@click.option(
+    "--study", is_flag=True, help="Use the study's published Tables 3 and 4 (package data)."
+)
+@click.option(
+    "--campaign", "campaigns", multiple=True, help="representative_models.csv/.json; repeat."
+)
+@click.option("--tunnel", "tunnels", multiple=True, help="<cfg>-derivatives.csv/.json; repeat.")
+@click.option(
+    "--user-csv", "user_csvs", multiple=True, help="User CSV (docs/design-trends.md); repeat."
+)
+@click.option("--basis", type=click.Choice(list(BASES)), default="linear", show_default=True)
+@click.option("--predict-b", type=float, help="Span b (mm) of a geometry to predict.")
+@click.option("--predict-b-le", type=float, help="Leading-edge span b_LE (mm).")
+@click.option("--predict-c-r", type=float, help="Root chord c_r (mm).")
+@click.option("--predict-c-t", type=float, help="Tip chord c_t (mm).")
+@click.option("--predict-x-h-mm", type=float, help="Tail position x_h (mm).")
+@click.option(
+    "--out", "out_dir", type=click.Path(file_okay=False), help="Write trends.json and plots."
+)
+@json_option
+def trends_command(
+    study: bool,
+    campaigns: tuple[str, ...],
+    tunnels: tuple[str, ...],
+    user_csvs: tuple[str, ...],
+    basis: str,
+    out_dir: str | None,
+    as_json: bool,
+    **predict_options: float | None,
+) -> None:
+    """Fit steady state and derivatives against tail geometry and x_h; print coefficients, LOO RMSE,
+    sources and, with --predict-*, a prediction with both intervals and its extrapolation measure."""
+    observations = gather_observations(study, campaigns, tunnels, user_csvs)
+    vector = _prediction_vector(predict_options)
+    model = fit_trends(observations, basis=basis)
+    result: dict[str, Any] = {
+        "basis": basis,
+        "trends": {name: trend.summary() for name, trend in model.trends.items()},
+        "unfitted": dict(model.unfitted),
+        "prediction": None,
+        "written": [],
+    }
+    if vector is not None:
+        result["prediction"] = {
+            "geometry_m": dict(zip(("b", "b_le", "c_r", "c_t", "x_h"), vector, strict=True)),
+            "quantities": {
+                name: prediction.as_dict() for name, prediction in model.predict(vector).items()
+            },
+        }
+    if out_dir is not None:
+        from ornitail.design.trends_plots import write_trend_picture
+
+        directory = Path(out_dir)
+        directory.mkdir(parents=True, exist_ok=True)
+        table = directory / "trends.json"
+        written = [table]
+        for trend in model.trends.values():
+            written += write_trend_picture(trend, observations, directory)
+        result["written"] = [str(path) for path in written]
+        table.write_text(json.dumps(to_jsonable(result), indent=2) + "\n", encoding="utf-8")
+    emit(result, as_json, _render)
