@@ -4,6 +4,8 @@ Runs the study's tunnel protocol (the shipped plan) on the shipped simulated rig
 tares, the tailed steady state and sweeps, the tailless steady state; then processes the runs as ``ornitail process``
 does (cycle averages, tail contribution, stability derivatives, plots) and prints the steady-state loads with and
 without tail, their 2-sigma spread over cycles, the tail's contribution and the derivatives with their sigma.
+Finally it flies a small simulated campaign, fits trends against tail geometry and proposes a tail
+(:mod:`ornitail.core.demo_design`).
 """
 
 from __future__ import annotations
@@ -27,7 +29,9 @@ from ornitail.acquisition.sweep_cli import (
 from ornitail.balance.point_loads import BODY_LOAD_NAMES
 from ornitail.balance.process_runs import process_runs
 from ornitail.balance.sweep_table import tail_contribution
+from ornitail.core.demo_design import design_from_simulated_campaign
 from ornitail.core.output import emit, json_option
+from ornitail.design.propose_cli import render_proposal
 
 DEMO_TIME_SCALE = 4.0
 """The simulated rig runs this many times faster than real time in the demo (the DAQ then streams 40 k
@@ -95,6 +99,16 @@ def _render(result: dict[str, Any]) -> str:
                 )
     if result.get("processed_folder"):
         lines.append(f"\nTables and plots: {result['processed_folder']}")
+    design = result.get("design")
+    if design:
+        targets = design["targets"]
+        lines.append("")
+        lines.append(
+            f"Tail proposal from the simulated flight campaign and the tunnel derivatives (target theta_ss "
+            f"{targets['theta_ss_deg']:g} +- {targets['theta_tolerance_deg']:g} deg, damping ratio >= "
+            f"{targets['damping_ratio_min']:g}, smallest area):"
+        )
+        lines.append(render_proposal(design))
     return "\n".join(lines)
 
 
@@ -136,5 +150,7 @@ def demo_command(data_root: Path | None, time_scale: float, as_json: bool) -> No
         result["derivatives"] = derivatives.get("derivatives", {})
         result["table_csv"] = processed["table_csv"]
         result["processed_folder"] = str(folder)
+        tunnel_derivatives = sorted(folder.glob("*-derivatives.json"))
+        result["design"] = design_from_simulated_campaign(folder, tunnel_derivatives)
     emit(result, as_json, _render)
     sys.exit(exit_code_of(sweep))

@@ -1,4 +1,4 @@
-"""The README's main job, run as a user runs it: `ornitail demo` on the simulated rig (about 45 s)."""
+"""The README's main job, run as a user runs it: `ornitail demo` on the simulated rig (about 90 s)."""
 
 import json
 import math
@@ -6,7 +6,9 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
+import pytest
 
 from ornitail.sim.configuration import study_configuration
 from ornitail.sim.tunnel import true_cycle_average
@@ -44,3 +46,22 @@ def test_demo_records_the_study_protocol_and_prints_cycle_averaged_loads(tmp_pat
     assert abs(contribution["x_n"] - true_tail_x_n) < 5e-3
     assert abs(steady["tailed"]["z_n"] - truth[True].aero_z_n) < 5e-3
     assert contribution["x_n_resolvable"] is True
+
+    # The last stage: a tail proposed from the simulated flight campaign and the tunnel derivatives.
+    design = result["design"]
+    assert design["targets_met"] is True
+    assert design["geometry"]["valid"] is True
+    theta = design["steady_state"]["theta_ss_deg"]["value"]
+    assert abs(theta - 22.0) <= 0.5 + 1e-6
+    # The damping inside the NLP (factor matching) and numpy's eigenvalues of the predicted A agree.
+    mode = design["oscillatory_mode"]
+    assert mode["damping_ratio"]["value"] == pytest.approx(
+        mode["damping_ratio_in_problem"], abs=1e-6
+    )
+    assert mode["damping_ratio"]["value"] >= 0.25 - 1e-6
+    poles = np.array([complex(p["real"], p["imag"]) for p in design["poles"]])
+    oscillatory = poles[np.abs(poles.imag) > 1e-9]
+    zeta_from_poles = -oscillatory.real[0] / abs(oscillatory[0])
+    assert zeta_from_poles == pytest.approx(mode["damping_ratio"]["value"], abs=1e-6)
+    for path in design["files"].values():
+        assert Path(path).stat().st_size > 0
