@@ -54,7 +54,7 @@ class ParetoPoint:
 def _solve(
     problem: ProposalProblem, settings: SolveSettings, starts: np.ndarray
 ) -> StartOutcome | None:
-    outcome, _ = best_of_starts(problem, settings, starts)
+    outcome, _, _ = best_of_starts(problem, settings, starts)
     return outcome
 
 

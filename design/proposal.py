@@ -78,6 +78,9 @@ _OPEN_BAND = 1e6
 _CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 _SLACK_TOLERANCE = 1e-4  # in soft units: 1e-4 deg, 2e-6 m/s ... far below anything that matters
 _BINDING_DUAL_TOLERANCE = 1e-6
+AGREEING_STARTS = 3
+"""Multi-start stops once this many starts reach the same best objective (0: run every start)."""
+_AGREEMENT_TOLERANCE = 1e-7  # relative objective: S to 1e-7 relative, ~1e-5 cm^2 at 136 cm^2
 _VERIFY_TOLERANCE = 1e-5  # NLP zeta vs numpy zeta: IPOPT tol 1e-8 on order-one equalities
 
 
@@ -196,6 +199,30 @@ class Proposal:
         return self.evaluation.aspect_ratio
 
 
+@dataclass
+class _BuiltNlp:
+    """One built Opti problem: its variables, parameters and named constraints.
+
+    ``robust_k`` and ``new_flight`` are None in the build without the robust term.
+    """
+
+    opti: Any
+    scaled: Any
+    factor: Any
+    slack: Any
+    zeta: Any
+    omega: Any
+    x_h_range: Any
+    target_lower: Any
+    target_upper: Any
+    slack_enabled: Any
+    robust_k: Any
+    new_flight: Any
+    weights: Any
+    named_constraints: list[tuple[str, Any]]
+    target_constraints: list[tuple[str, Any, Any]]
+
+
 class ProposalProblem:
     """The proposal NLP for one trend model, built once and re-solved.
 
@@ -222,7 +249,15 @@ class ProposalProblem:
         )
         require_model_quantities(trend_model, self.mass_inertia)
         self.solve_count = 0
-        self._build()
+        self._a_matrix_function, self._sigma_zeta_function = self._model_functions()
+        self._has_frequency_trend = "f_ss_hz" in self.trend_model.trends
+        self._builds = {False: self._build(robust=False)}
+
+    def _nlp_for(self, robust: bool) -> _BuiltNlp:
+        """The NLP without the robust term (robust_k = 0), or with it (built at first need)."""
+        if robust not in self._builds:
+            self._builds[robust] = self._build(robust=robust)
+        return self._builds[robust]
 
     # -- building ---------------------------------------------------------------------------------
     def _quantity_expressions(self, vector: tuple[Any, ...]) -> tuple[dict, dict, dict]:
@@ -246,7 +281,26 @@ class ProposalProblem:
                 values[name] = self.mass_inertia.iyy_kg_m2(vector)
         return values, variance_mean, residual_variance
 
-    def _build(self) -> None:
+    def _model_functions(self) -> tuple[ca.Function, ca.Function]:
+        """A(scaled geometry) and sigma_zeta(scaled geometry, factor, new_flight) as functions."""
+        scaled = ca.MX.sym("scaled", 5)
+        factor = ca.MX.sym("factor", 4)
+        new_flight = ca.MX.sym("new_flight")
+        vector = tuple(_LENGTH_SCALE_M * scaled[index] for index in range(5))
+        values, variance_mean, residual_variance = self._quantity_expressions(vector)
+        a_rows = a_matrix_of_quantities(values, cos=ca.cos, sin=ca.sin)
+        a_matrix = ca.Function(
+            "a_matrix", [scaled], [ca.vertcat(*[ca.horzcat(*row) for row in a_rows])]
+        )
+        sigma = self._delta_method_sigma(
+            values, variance_mean, residual_variance, factor, new_flight
+        )
+        sigma_zeta = ca.Function("sigma_zeta", [scaled, factor, new_flight], [sigma])
+        return a_matrix.expand(), sigma_zeta.expand()
+
+    def _build(self, robust: bool) -> _BuiltNlp:
+        """Build the Opti problem; without ``robust`` the sigma_zeta expressions are left out
+        (they are most of the Hessian's cost and vanish when robust_k = 0)."""
         opti = ca.Opti()
         bounds = self.bounds
         scaled = opti.variable(5)
@@ -259,30 +313,29 @@ class ProposalProblem:
         second_constant = _SECOND_FACTOR_SCALE * factor[3]
         slack = opti.variable(5)
 
-        self.x_h_range = opti.parameter(2)
-        self.target_lower = opti.parameter(5)
-        self.target_upper = opti.parameter(5)
-        self.slack_enabled = opti.parameter()
-        self.robust_k = opti.parameter()
-        self.new_flight = opti.parameter()
-        self.weights = opti.parameter(3)  # area, damping, target slacks
+        x_h_range = opti.parameter(2)
+        target_lower = opti.parameter(5)
+        target_upper = opti.parameter(5)
+        slack_enabled = opti.parameter()
+        robust_k = opti.parameter() if robust else None
+        new_flight = opti.parameter() if robust else None
+        weights = opti.parameter(3)  # area, damping, target slacks
 
-        values, variance_mean, residual_variance = self._quantity_expressions(vector)
+        values, _, _ = self._quantity_expressions(vector)
         area = (leading_edge_span + span) / 2 * (root_chord - tip_chord) + span * tip_chord
         aspect_ratio = span * span / area
 
         a_rows = a_matrix_of_quantities(values, cos=ca.cos, sin=ca.sin)
         polynomial = characteristic_polynomial(a_rows)
         factored = quadratic_factor_coefficients(zeta, omega, second_linear, second_constant)
-        self._a_matrix_function = ca.Function(
-            "a_matrix", [scaled], [ca.vertcat(*[ca.horzcat(*row) for row in a_rows])]
-        )
         reference = self._reference_polynomial()
         for k in range(4):
             opti.subject_to((factored[k] - polynomial[k]) / reference[k] == 0)
 
-        sigma_zeta = self._delta_method_sigma(values, variance_mean, residual_variance, factor)
-        robust_zeta = zeta - self.robust_k * sigma_zeta
+        robust_zeta = zeta
+        if robust:
+            sigma_zeta = self._sigma_zeta_function(scaled, factor, new_flight)
+            robust_zeta = zeta - robust_k * sigma_zeta
 
         named: list[tuple[str, Any]] = []
 
@@ -325,7 +378,7 @@ class ProposalProblem:
         )
         require(
             "tail position x_h within the allowed range",
-            opti.bounded(self.x_h_range[0], scaled[4], self.x_h_range[1]),
+            opti.bounded(x_h_range[0], scaled[4], x_h_range[1]),
         )
         require(
             f"pitch mode oscillatory (zeta <= {MAX_OSCILLATORY_DAMPING})",
@@ -353,36 +406,46 @@ class ProposalProblem:
             robust_zeta,
             omega,
         ]
-        self._target_constraints = []
+        target_constraints = []
         for index, (name, expression) in enumerate(
             zip(TARGET_NAMES, target_expressions, strict=True)
         ):
             unit = TARGET_SOFT_UNITS[index]
-            relaxed = self.slack_enabled * slack[index]
-            lower = expression / unit >= self.target_lower[index] - relaxed
-            upper = expression / unit <= self.target_upper[index] + relaxed
+            relaxed = slack_enabled * slack[index]
+            lower = expression / unit >= target_lower[index] - relaxed
+            upper = expression / unit <= target_upper[index] + relaxed
             opti.subject_to(lower)
             opti.subject_to(upper)
-            self._target_constraints.append((name, lower, upper))
+            target_constraints.append((name, lower, upper))
         opti.subject_to(slack >= 0)
 
-        slack_penalty = ca.sumsqr(slack)
         opti.minimize(
-            self.weights[0] * area / _AREA_SCALE_M2
-            - self.weights[1] * robust_zeta
-            + self.weights[2] * slack_penalty
+            weights[0] * area / _AREA_SCALE_M2
+            - weights[1] * robust_zeta
+            + weights[2] * ca.sumsqr(slack)
         )
         opti.solver(
             "ipopt",
             {"print_time": False, "error_on_fail": False, "expand": True},
             {"print_level": 0, "sb": "yes", "max_iter": 300, "tol": 1e-9},
         )
-        self.opti = opti
-        self._scaled, self._factor, self._slack = scaled, factor, slack
-        self._zeta, self._omega, self._sigma_zeta = zeta, omega, sigma_zeta
-        self._area, self._robust_zeta, self._slack_penalty = area, robust_zeta, slack_penalty
-        self._named_constraints = named
-        self._has_frequency_trend = "f_ss_hz" in values
+        return _BuiltNlp(
+            opti=opti,
+            scaled=scaled,
+            factor=factor,
+            slack=slack,
+            zeta=zeta,
+            omega=omega,
+            x_h_range=x_h_range,
+            target_lower=target_lower,
+            target_upper=target_upper,
+            slack_enabled=slack_enabled,
+            robust_k=robust_k,
+            new_flight=new_flight,
+            weights=weights,
+            named_constraints=named,
+            target_constraints=target_constraints,
+        )
 
     def _require_fitted_range(self, vector: tuple[Any, ...], require: Any) -> None:
         """Keep every fitted feature (S, AR, b, x_h, ...) inside the range of each trend's data."""
@@ -414,7 +477,12 @@ class ProposalProblem:
         return [max(abs(float(c)), 1.0) for c in characteristic_polynomial(matrix)]
 
     def _delta_method_sigma(
-        self, values: dict, variance_mean: dict, residual_variance: dict, factor: Any
+        self,
+        values: dict,
+        variance_mean: dict,
+        residual_variance: dict,
+        factor: Any,
+        new_flight: Any,
     ) -> Any:
         names = list(A_MODEL_QUANTITIES)
         quantity_symbols = ca.SX.sym("v", len(names))
@@ -452,7 +520,7 @@ class ProposalProblem:
         for i, name in enumerate(names):
             if name not in variance_mean:
                 continue  # mass and inertia from design/mass_model.py: no variance
-            quantity_variance = variance_mean[name] + self.new_flight * residual_variance[name]
+            quantity_variance = variance_mean[name] + new_flight * residual_variance[name]
             variance = variance + row[i] ** 2 * quantity_variance
         return ca.sqrt(variance + 1e-14)
 
@@ -488,7 +556,8 @@ class ProposalProblem:
                 "--robust-interval",
                 f"unknown interval {settings.interval_kind!r}; choose mean or new",
             )
-        opti = self.opti
+        nlp = self._nlp_for(robust=settings.robust_k > 0)
+        opti = nlp.opti
         lower, upper = [], []
         for band, unit in zip(settings.targets.bands(), TARGET_SOFT_UNITS, strict=True):
             lower.append(-_OPEN_BAND if band is None else band.lower / unit)
@@ -497,13 +566,15 @@ class ProposalProblem:
             raise UserInputError(
                 "--f-ss-hz", "the trend data has no flapping-frequency trend (f_ss_hz)"
             )
-        opti.set_value(self.target_lower, lower)
-        opti.set_value(self.target_upper, upper)
+        opti.set_value(nlp.target_lower, lower)
+        opti.set_value(nlp.target_upper, upper)
         soft = settings.soft_targets or settings.objective == "closest"
-        opti.set_value(self.slack_enabled, 1.0 if soft else 0.0)
-        opti.set_value(self.robust_k, settings.robust_k)
-        opti.set_value(self.new_flight, 1.0 if settings.interval_kind == "new" else 0.0)
-        opti.set_value(self.x_h_range, np.array(settings.x_h_range_m) / _LENGTH_SCALE_M)
+        opti.set_value(nlp.slack_enabled, 1.0 if soft else 0.0)
+        new_flight = 1.0 if settings.interval_kind == "new" else 0.0
+        if nlp.robust_k is not None:
+            opti.set_value(nlp.robust_k, settings.robust_k)
+            opti.set_value(nlp.new_flight, new_flight)
+        opti.set_value(nlp.x_h_range, np.array(settings.x_h_range_m) / _LENGTH_SCALE_M)
         weights = {
             "min-area": [1.0, 0.0, 1.0],  # slack weight 1: slacks are unused when hard, and
             "max-damping": [1e-3, 1.0, 1.0],  # curvature there keeps IPOPT's iterations few
@@ -511,12 +582,12 @@ class ProposalProblem:
         }[settings.objective]
         if soft and settings.objective != "closest":
             weights = [weights[0] * 1e-3, weights[1] * 1e-3, 1.0]
-        opti.set_value(self.weights, weights)
+        opti.set_value(nlp.weights, weights)
         start = np.array(start_vector_m, dtype=float)
         start[4] = min(max(start[4], settings.x_h_range_m[0]), settings.x_h_range_m[1])
-        opti.set_initial(self._scaled, start / _LENGTH_SCALE_M)
-        opti.set_initial(self._factor, self._initial_factor(start))
-        opti.set_initial(self._slack, np.zeros(5))
+        opti.set_initial(nlp.scaled, start / _LENGTH_SCALE_M)
+        opti.set_initial(nlp.factor, self._initial_factor(start))
+        opti.set_initial(nlp.slack, np.zeros(5))
         self.solve_count += 1
         try:
             value = opti.solve().value
@@ -524,8 +595,8 @@ class ProposalProblem:
             value = opti.debug.value
         status = str(opti.stats()["return_status"])
         if status not in _CONVERGED:
-            return _failed_outcome(status, np.array(value(self._scaled)).ravel() * _LENGTH_SCALE_M)
-        slack = np.atleast_1d(value(self._slack))
+            return _failed_outcome(status, np.array(value(nlp.scaled)).ravel() * _LENGTH_SCALE_M)
+        slack = np.atleast_1d(value(nlp.slack))
         violations = {}
         for index, name in enumerate(TARGET_NAMES):
             if (
@@ -535,21 +606,24 @@ class ProposalProblem:
             ):
                 violations[name] = float(slack[index] * TARGET_SOFT_UNITS[index])
         binding = []
-        for name, constraint in self._named_constraints:
+        for name, constraint in nlp.named_constraints:
             if _dual_size(value(opti.dual(constraint))) > _BINDING_DUAL_TOLERANCE:
                 binding.append(name)
-        for name, lower_constraint, upper_constraint in self._target_constraints:
+        for name, lower_constraint, upper_constraint in nlp.target_constraints:
             for label, constraint in (("lower", lower_constraint), ("upper", upper_constraint)):
                 if (
                     _dual_size(value(opti.dual(constraint))) > _BINDING_DUAL_TOLERANCE
                     and name not in violations
                 ):
                     binding.append(f"target {name} ({label} bound)")
+        scaled_value, factor_value = value(nlp.scaled), value(nlp.factor)
         return StartOutcome(
-            geometry_vector_m=np.array(value(self._scaled)).ravel() * _LENGTH_SCALE_M,
-            damping_ratio=float(value(self._zeta)),
-            natural_frequency_rad_s=float(value(self._omega)),
-            sigma_damping_ratio=float(value(self._sigma_zeta)),
+            geometry_vector_m=np.array(scaled_value).ravel() * _LENGTH_SCALE_M,
+            damping_ratio=float(value(nlp.zeta)),
+            natural_frequency_rad_s=float(value(nlp.omega)),
+            sigma_damping_ratio=float(
+                self._sigma_zeta_function(scaled_value, factor_value, new_flight)
+            ),
             objective_value=float(value(opti.f)),
             target_violations=violations,
             binding_constraints=binding,
@@ -582,12 +656,20 @@ def _objective_rank(outcome: StartOutcome) -> float:
 
 
 def best_of_starts(
-    problem: ProposalProblem, settings: SolveSettings, starts: np.ndarray
-) -> tuple[StartOutcome | None, int]:
-    """Solve from every start (sequentially: IPOPT is not thread-safe); return the best verified
-    converged outcome and the number that converged."""
-    best, converged = None, 0
+    problem: ProposalProblem,
+    settings: SolveSettings,
+    starts: np.ndarray,
+    agreeing_starts: int = AGREEING_STARTS,
+) -> tuple[StartOutcome | None, int, int]:
+    """Solve from the starts in order (sequentially: IPOPT is not thread-safe); return the best
+    verified converged outcome, the number that converged and the number tried.
+
+    Stops early once ``agreeing_starts`` verified starts have reached the best objective within
+    ``_AGREEMENT_TOLERANCE`` (relative): further starts would only find it again. 0 runs them all.
+    """
+    best, converged, tried, agreeing = None, 0, 0, 0
     for start in starts:
+        tried += 1
         outcome = problem.solve_from(settings, start)
         if not outcome.converged:
             continue
@@ -595,9 +677,20 @@ def best_of_starts(
         if not outcome.verified:
             continue
         converged += 1
-        if best is None or _objective_rank(outcome) < _objective_rank(best):
-            best = outcome
-    return best, converged
+        if best is not None and _objectives_agree(outcome, best):
+            agreeing += 1
+            if _objective_rank(outcome) < _objective_rank(best):
+                best = outcome
+        elif best is None or _objective_rank(outcome) < _objective_rank(best):
+            best, agreeing = outcome, 1
+        if agreeing_starts and agreeing >= agreeing_starts:
+            break
+    return best, converged, tried
+
+
+def _objectives_agree(first: StartOutcome, second: StartOutcome) -> bool:
+    scale = max(abs(first.objective_value), abs(second.objective_value), 1.0)
+    return abs(first.objective_value - second.objective_value) <= _AGREEMENT_TOLERANCE * scale
 
 
 def _verified_by_numpy(problem: ProposalProblem, outcome: StartOutcome) -> bool:
@@ -665,8 +758,8 @@ def propose(
         for x_h_range in ranges:
             settings = SolveSettings(targets, objective, robust_k, interval_kind, x_h_range, soft)
             starts = sobol_start_points(bounds, start_count, x_h_range)
-            outcome, converged = best_of_starts(problem, settings, starts)
-            tried += len(starts)
+            outcome, converged, tried_here = best_of_starts(problem, settings, starts)
+            tried += tried_here
             converged_total += converged
             per_position.append(
                 {

@@ -24,8 +24,11 @@ from ornitail.design.linear_model import a_matrix, characteristic_polynomial, mo
 from ornitail.design.proposal import (
     DesignTargets,
     ProposalProblem,
+    SolveSettings,
     TargetBand,
+    best_of_starts,
     propose,
+    sobol_start_points,
 )
 from ornitail.design.trend_data import TrendObservation
 from ornitail.design.trends import fit_trends
@@ -151,6 +154,40 @@ def test_damping_inside_the_problem_equals_numpy_eigenvalues(robust_k: float) ->
     )
     robust = evaluation.damping_ratio.value - robust_k * evaluation.damping_ratio.sigma_new
     assert robust == pytest.approx(0.35, abs=1e-5)
+
+
+def test_early_stop_of_multi_start_keeps_the_optimum(exact_problem) -> None:
+    settings = SolveSettings(DesignTargets(damping_ratio_min=0.40), x_h_range_m=(0.098, 0.098))
+    starts = sobol_start_points(exact_problem.bounds, 8, (0.098, 0.098))
+    every, every_converged, every_tried = best_of_starts(
+        exact_problem, settings, starts, agreeing_starts=0
+    )
+    early, early_converged, early_tried = best_of_starts(
+        exact_problem, settings, starts, agreeing_starts=3
+    )
+    assert every_tried == 8
+    assert 3 <= early_converged <= early_tried < every_tried
+    assert every_converged >= early_converged
+    # both stop at IPOPT tol 1e-9 on an order-one objective (S in units of 100 cm^2)
+    assert early.objective_value == pytest.approx(every.objective_value, abs=1e-7)
+
+
+def test_robust_build_with_k_zero_equals_the_build_without_the_robust_term(exact_problem) -> None:
+    # k = 0 in the robust NLP multiplies sigma_zeta by zero: the same problem, the same optimum
+    settings = SolveSettings(DesignTargets(damping_ratio_min=0.40), x_h_range_m=(0.098, 0.098))
+    start = sobol_start_points(exact_problem.bounds, 1, (0.098, 0.098))[0]
+    plain = exact_problem.solve_from(settings, start)
+    exact_problem._nlp_for(robust=True)  # noqa: SLF001 - the robust NLP, solved with k = 0
+    robust_nlp = exact_problem._builds.pop(True)  # noqa: SLF001
+    exact_problem._builds[False], saved = robust_nlp, exact_problem._builds[False]  # noqa: SLF001
+    try:
+        with_term = exact_problem.solve_from(settings, start)
+    finally:
+        exact_problem._builds[False] = saved  # noqa: SLF001
+    # IPOPT tol 1e-9 on both; the geometry's degenerate directions are fixed by S and AR only
+    assert with_term.objective_value == pytest.approx(plain.objective_value, abs=1e-7)
+    assert with_term.damping_ratio == pytest.approx(plain.damping_ratio, abs=1e-6)
+    assert with_term.sigma_damping_ratio == pytest.approx(plain.sigma_damping_ratio, rel=1e-6)
 
 
 def test_unreachable_target_gives_nearest_design_and_names_the_binding_constraint(
