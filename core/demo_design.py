@@ -17,8 +17,8 @@ import click
 from ornitail.design.drawing import write_proposal_drawings
 from ornitail.design.proposal import propose
 from ornitail.design.propose_cli import proposal_result, targets_from_options
+from ornitail.design.trend_sources import gather_observations
 from ornitail.design.trends import fit_trends
-from ornitail.design.trends_cli import gather_observations
 from ornitail.flight.campaign import run_campaign
 from ornitail.flight.campaign_file import DEFAULT_SEED, CampaignSpec, configuration_from_label
 from ornitail.flight.campaign_table import write_campaign_table

@@ -12,11 +12,8 @@ from ornitail.core.errors import require_finite
 from ornitail.core.output import emit, json_option
 from ornitail.design.pareto import FRONT_KINDS, pareto_front, write_front
 from ornitail.design.proposal import ProposalProblem
-from ornitail.design.propose_cli import (
-    targets_from_options,
-    trend_model_from_options,
-    trend_source_options,
-)
+from ornitail.design.propose_cli import targets_from_options
+from ornitail.design.trend_sources import trend_model_from_options, trend_source_options
 
 
 def _render(result: dict[str, Any]) -> str:

@@ -20,9 +20,8 @@ from ornitail.design.proposal import (
     TargetBand,
     propose,
 )
-from ornitail.design.trend_basis import BASES
-from ornitail.design.trends import TrendModel, fit_trends
-from ornitail.design.trends_cli import gather_observations
+from ornitail.design.trend_sources import trend_model_from_options, trend_source_options
+from ornitail.design.trends import TrendModel
 
 _UNMET_UNITS = {
     "theta_ss": ("deg", math.degrees(1.0)),
@@ -31,54 +30,6 @@ _UNMET_UNITS = {
     "damping_ratio": ("", 1.0),
     "natural_frequency": ("rad/s", 1.0),
 }
-
-
-def trend_source_options(function: Any) -> Any:
-    """The trend-source options shared by ``propose`` and ``pareto``."""
-    for option in reversed(
-        [
-            click.option("--study", is_flag=True, help="The study's published tables (default)."),
-            click.option(
-                "--campaign",
-                "campaigns",
-                multiple=True,
-                type=click.Path(),
-                help="representative_models.csv/json of `ornitail flight campaign`.",
-            ),
-            click.option(
-                "--tunnel",
-                "tunnels",
-                multiple=True,
-                type=click.Path(),
-                help="Derivatives CSV/JSON of `ornitail process`.",
-            ),
-            click.option(
-                "--user-csv",
-                "user_csvs",
-                multiple=True,
-                type=click.Path(),
-                help="A user CSV of observations (docs/design-trends.md).",
-            ),
-            click.option(
-                "--basis",
-                type=click.Choice(sorted(BASES)),
-                default="linear",
-                show_default=True,
-                help="Trend basis.",
-            ),
-        ]
-    ):
-        function = option(function)
-    return function
-
-
-def trend_model_from_options(
-    study: bool, campaigns: tuple, tunnels: tuple, user_csvs: tuple, basis: str
-) -> TrendModel:
-    """Fit the trends of the chosen sources; the study tables when none is chosen."""
-    if not (study or campaigns or tunnels or user_csvs):
-        study = True
-    return fit_trends(gather_observations(study, campaigns, tunnels, user_csvs), basis=basis)
 
 
 def _band(where: str, value: float | None, tolerance: float, scale: float) -> TargetBand | None:

@@ -11,35 +11,10 @@ import click
 from ornitail.core.errors import UserInputError, require_finite
 from ornitail.core.output import emit, json_option, to_jsonable
 from ornitail.design.geometry import TailGeometry
-from ornitail.design.trend_basis import BASES
-from ornitail.design.trend_data import (
-    TrendObservation,
-    observations_from_campaign,
-    observations_from_study_tables,
-    observations_from_tunnel,
-    observations_from_user_csv,
-)
+from ornitail.design.trend_sources import gather_observations, trend_source_options
 from ornitail.design.trends import fit_trends
 
 _PREDICT_OPTIONS = ("predict_b", "predict_b_le", "predict_c_r", "predict_c_t", "predict_x_h_mm")
-
-
-def gather_observations(
-    study: bool, campaigns: tuple[str, ...], tunnels: tuple[str, ...], user_csvs: tuple[str, ...]
-) -> list[TrendObservation]:
-    """Every observation of the chosen sources; at least one source must be chosen."""
-    if not (study or campaigns or tunnels or user_csvs):
-        raise UserInputError(
-            "sources", "give at least one of --study, --campaign, --tunnel, --user-csv"
-        )
-    observations = observations_from_study_tables() if study else []
-    for path in campaigns:
-        observations += observations_from_campaign(path)
-    for path in tunnels:
-        observations += observations_from_tunnel(path)
-    for path in user_csvs:
-        observations += observations_from_user_csv(path)
-    return observations
 
 
 def _prediction_vector(options: dict[str, float | None]) -> tuple[float, ...] | None:
@@ -86,17 +61,7 @@ def _render(result: dict[str, Any]) -> str:
 
 
 @click.command("trends")
-@click.option(
-    "--study", is_flag=True, help="Use the study's published Tables 3 and 4 (package data)."
-)
-@click.option(
-    "--campaign", "campaigns", multiple=True, help="representative_models.csv/.json; repeat."
-)
-@click.option("--tunnel", "tunnels", multiple=True, help="<cfg>-derivatives.csv/.json; repeat.")
-@click.option(
-    "--user-csv", "user_csvs", multiple=True, help="User CSV (docs/design-trends.md); repeat."
-)
-@click.option("--basis", type=click.Choice(list(BASES)), default="linear", show_default=True)
+@trend_source_options
 @click.option("--predict-b", type=float, help="Span b (mm) of a geometry to predict.")
 @click.option("--predict-b-le", type=float, help="Leading-edge span b_LE (mm).")
 @click.option("--predict-c-r", type=float, help="Root chord c_r (mm).")
