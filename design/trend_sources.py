@@ -47,7 +47,7 @@ def trend_source_options(function: Any) -> Any:
             click.option(
                 "--study",
                 is_flag=True,
-                help="The study's published tables (package data; propose and pareto use them when no source is given).",
+                help="The study's published tables (package data; propose and pareto use them by default).",
             ),
             click.option(
                 "--campaign",
