@@ -67,6 +67,7 @@ class Rig:
         self.motor: FlappingMotorDriver | None = None
         self.balance: SerialDaqDriver | NetCanOemDriver | None = None
         self.simulators: SimulatedRigInstruments | None = None
+        self._balance_clock: tuple[float, float] | None = None  # (rig time at start, s; rate, Hz)
 
     @classmethod
     def from_file(
@@ -286,12 +287,28 @@ class Rig:
         if isinstance(balance, SerialDaqDriver):
             balance.set_sample_rate(sample_rate_hz or self.description.serial_daq.sample_rate_hz)
             balance.start()
+            rate_hz = balance.sample_rate_hz
         else:
-            balance.start_polling(sample_rate_hz or self.description.can.sample_rate_hz)
+            rate_hz = sample_rate_hz or self.description.can.sample_rate_hz
+            balance.start_polling(rate_hz)
+        self._balance_clock = (self.now_s(), float(rate_hz))
+
+    def balance_samples_since_start(self) -> int:
+        """Samples the balance has taken since its stream started, from the rig time since then.
+
+        Rig time read after START was answered is at or after the board's first sample, so this never
+        undercounts (crystal drift: ~50 ppm). It lets a sweep pick rows by when they were sampled, not by
+        when they reached the host through the transport's buffers.
+        """
+        if self._balance_clock is None:
+            raise RuntimeError("the balance is not streaming: start_balance() first")
+        started_s, rate_hz = self._balance_clock
+        return int(math.ceil((self.now_s() - started_s) * rate_hz))
 
     def stop_balance(self) -> None:
         """Stop the balance stream or polling."""
         balance = self._connected(self.balance)
+        self._balance_clock = None
         if isinstance(balance, SerialDaqDriver):
             balance.stop()
         else:

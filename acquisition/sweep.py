@@ -19,10 +19,13 @@ from __future__ import annotations
 
 import math
 import threading
+from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from itertools import groupby
 from pathlib import Path
+
+import numpy as np
 
 from ornitail.acquisition.catalog import RunCatalog, RunFilter
 from ornitail.acquisition.daq_protocol import CHANNEL_NAMES
@@ -44,6 +47,8 @@ RECORD_START_DELAY_S = 0.1
 """Rig time between settling and the first recorded row: covers the driver's ~10 ms block latency."""
 POLL_INTERVAL_S = 0.1
 """Rig time between readings while settling."""
+RECENT_BLOCKS_KEPT = 2000
+"""Blocks whose counters the pump remembers (the driver delivers ~100 a second: minutes of backlog)."""
 
 
 class SweepStop:
@@ -156,7 +161,11 @@ def completed_plan_points(run_directories: Iterable[Path]) -> set[int]:
 
 
 class _BalancePump(threading.Thread):
-    """Moves blocks from the balance driver to the recorder and reports link health as increments."""
+    """Moves blocks from the balance driver to the recorder and reports link health as increments.
+
+    It remembers the sample counters of the recent rows it handed over, so a set point's rows can be chosen
+    by the board's counter (when they were sampled) rather than by when they reached the host.
+    """
 
     def __init__(self, driver: SerialDaqDriver, recorder: Recorder) -> None:
         super().__init__(name="balance-pump", daemon=True)
@@ -165,6 +174,9 @@ class _BalancePump(threading.Thread):
         self._stop_event = threading.Event()
         self._reported_crc_errors = 0
         self._reported_lost_samples = 0
+        self._recent_rows: deque[tuple[int, np.ndarray]] = deque(maxlen=RECENT_BLOCKS_KEPT)
+        self._recent_rows_lock = threading.Lock()
+        self._first_counter: int | None = None
 
     def run(self) -> None:
         try:
@@ -173,10 +185,28 @@ class _BalancePump(threading.Thread):
                 if block is None:
                     self.driver.raise_if_failed()
                     continue
-                self.recorder.put_block(block.counters, block.volts)
+                first_row = self.recorder.next_sample_index
+                if self.recorder.put_block(block.counters, block.volts):
+                    with self._recent_rows_lock:
+                        if self._first_counter is None:
+                            self._first_counter = int(block.counters[0])
+                        self._recent_rows.append((first_row, block.counters))
                 self._report_link_health()
         except BaseException as error:  # handed to the sweep thread, which raises it
             self.error = error
+
+    def first_row_sampled_after(self, samples_since_start: int) -> int | None:
+        """Row index of the first recorded sample taken at least ``samples_since_start`` samples after the
+        stream's first (counters continue across streams); None until such a sample has arrived."""
+        with self._recent_rows_lock:
+            if self._first_counter is None:
+                return None
+            counter = self._first_counter + samples_since_start
+            blocks = list(self._recent_rows)
+        for first_row, counters in blocks:
+            if counters[-1] >= counter:
+                return first_row + int(np.searchsorted(counters, counter))
+        return None
 
     def _report_link_health(self) -> None:
         statistics = self.driver.statistics
@@ -296,9 +326,17 @@ def _record_point(
     sample_rate_hz: float,
     settle_s: float,
 ) -> SetPointRecord:
-    """Take the next ``record_s`` of the stream as this point's rows and journal it."""
+    """Take the ``record_s`` of the stream sampled from now on as this point's rows and journal it.
+
+    Rows still in transit (pty, driver queue) when the point settled were sampled before it settled; the board's
+    counter, not the arrival order, decides where the point begins.
+    """
     _wait_rig_s(rig, RECORD_START_DELAY_S, pump)
-    first = recorder.next_sample_index
+    samples_since_start = rig.balance_samples_since_start()
+    first = pump.first_row_sampled_after(samples_since_start)
+    while first is None:
+        _wait_rig_s(rig, 0.05, pump)
+        first = pump.first_row_sampled_after(samples_since_start)
     count = int(round(point.record_s * sample_rate_hz))
     while recorder.next_sample_index < first + count:
         _wait_rig_s(rig, 0.05, pump)
