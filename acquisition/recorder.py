@@ -246,6 +246,11 @@ class Recorder:
         return self._next_sample_index
 
     @property
+    def queue_lost_samples(self) -> int:
+        """Samples dropped because the writer queue was full (0 while the writer keeps up)."""
+        return self._queue_lost_samples
+
+    @property
     def flushed_sample_count(self) -> int:
         """Samples written to ``samples.h5`` and flushed so far (they survive a crash)."""
         return self._rows_written

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Set up ornitail for development on a fresh Debian machine with Python 3.11:
-# system libraries the tests need (when missing), a virtualenv in .venv, and an editable install.
+# system libraries the tests need (when missing), a virtualenv in .venv, and an editable install
+# with the test tools and the GUI (PySide6 only: pyqtgraph would pick PyQt6 if both were installed).
 # Sourced by demo.sh and test.sh; safe to run again (it only installs what is missing).
 set -euo pipefail
 repo_root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -38,7 +39,7 @@ stamp=.venv/.ornitail-installed
 if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
   echo "setup: installing ornitail and its dependencies into .venv"
   log=.venv/pip-install.log
-  if ! { .venv/bin/python -m pip install --upgrade pip && .venv/bin/python -m pip install -e ".[test]"; } >"$log" 2>&1; then
+  if ! { .venv/bin/python -m pip install --upgrade pip && .venv/bin/python -m pip install -e ".[test,gui]"; } >"$log" 2>&1; then
     tail -n 30 "$log" >&2
     echo "setup: pip install failed; the whole log is in $log" >&2
     exit 1

@@ -1,0 +1,253 @@
+"""The balance stream outside a sweep: a display copy always, a recorder only while one is attached.
+
+A pump thread takes every block from the DAQ driver. It hands it to the attached :class:`Recorder` (whose
+bounded queue never waits) and offers a decimated copy to a drop-oldest :class:`DisplayFeed`, so a slow or frozen
+display can never cost a recorded sample. :meth:`LiveBalance.measure` averages the next ``record_s`` of full-rate
+rows (a wind-off tare) and, while recording, names the rows it used, so a manual tare or measurement becomes a
+set point of the run exactly as a sweep's would. Link health (CRC failures, lost samples, writer-queue losses) and
+ADC clipping are counted here for a status display.
+"""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+
+import numpy as np
+
+from ornitail.acquisition.daq_protocol import ANALOG_CHANNEL_COUNT, CHANNEL_NAMES
+from ornitail.acquisition.recorder import DisplayFeed, Recorder
+from ornitail.acquisition.recording_layout import ChannelSpec, StreamLayout
+from ornitail.acquisition.rig import Rig
+from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
+from ornitail.core.errors import UserInputError
+
+GET_BLOCK_TIMEOUT_S = 0.1
+
+
+@dataclass(frozen=True)
+class LinkHealth:
+    """Counts since the stream started: CRC failures, samples lost on the link, blocks the driver dropped,
+    samples the recorder's writer queue dropped, and clipped samples per analog channel (``CHANNEL_NAMES[:8]``).
+    """
+
+    crc_errors: int
+    link_lost_samples: int
+    driver_dropped_blocks: int
+    recorder_lost_samples: int
+    clipped_samples: tuple[int, ...]
+
+    @property
+    def saturated_channels(self) -> list[str]:
+        """Names of the analog channels that clipped at the ADC range at least once."""
+        return [
+            name for name, count in zip(CHANNEL_NAMES, self.clipped_samples, strict=False) if count
+        ]
+
+
+@dataclass(frozen=True)
+class MeasuredRows:
+    """What :meth:`LiveBalance.measure` saw: mean of each channel (V, ``CHANNEL_NAMES`` order), the row count,
+    and the first and last recorder row index (None when no recorder was attached)."""
+
+    mean_volts: np.ndarray
+    rows: int
+    first_row_index: int | None
+    last_row_index: int | None
+
+
+def balance_stream_layout(sample_rate_hz: float) -> StreamLayout:
+    """The recorded layout of the DAQ board's nine channels (V), as a sweep records them."""
+    return StreamLayout(
+        channels=[ChannelSpec(name, "V") for name in CHANNEL_NAMES],
+        sample_rate_hz=sample_rate_hz,
+        sample_dtype="float32",
+        counter_dtype="uint32",
+    )
+
+
+class _Measurement:
+    """Sums of the next ``rows`` rows the pump sees."""
+
+    def __init__(self, rows: int, recorder: Recorder | None) -> None:
+        self.rows_wanted = rows
+        self.recorder = recorder
+        self.sums = np.zeros(len(CHANNEL_NAMES))
+        self.rows = 0
+        self.first_row_index: int | None = None
+        self.done = threading.Event()
+
+    def add(self, volts: np.ndarray, first_row_index: int | None) -> None:
+        take = min(len(volts), self.rows_wanted - self.rows)
+        if self.rows == 0:
+            self.first_row_index = first_row_index
+        self.sums += volts[:take].sum(axis=0)
+        self.rows += take
+        if self.rows >= self.rows_wanted:
+            self.done.set()
+
+
+class LiveBalance:
+    """Stream the rig's serial DAQ balance for a display, and into a recorder while one is attached.
+
+    Parameters
+    ----------
+    rig : Rig
+        A connected rig whose balance route is ``serial_daq``.
+    display_decimation : int
+        Every n-th row goes to :attr:`display_feed` (display only; the recorder gets every row).
+    display_capacity_blocks : int
+        Blocks the display feed keeps before dropping the oldest.
+    """
+
+    def __init__(self, rig: Rig, display_decimation: int = 10, display_capacity_blocks: int = 512):
+        if not isinstance(rig.balance, SerialDaqDriver):
+            raise UserInputError(
+                f"{rig.description.path}: [balance].route",
+                'the live view streams the serial DAQ (Hall line and hot-wire included); use route = "serial_daq"',
+            )
+        self.rig = rig
+        self.driver: SerialDaqDriver = rig.balance
+        self.display_feed = DisplayFeed(display_decimation, display_capacity_blocks)
+        self.sample_rate_hz = float(rig.description.serial_daq.sample_rate_hz)
+        self.error: BaseException | None = None
+        self._recorder: Recorder | None = None
+        self._measurement: _Measurement | None = None
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._rows_seen = 0
+        self._reported = (0, 0)
+        self._recorder_lost_before = 0
+        self._clipped = np.zeros(ANALOG_CHANNEL_COUNT, dtype=np.int64)
+        self._clip_low_v = self._clip_high_v = np.zeros(ANALOG_CHANNEL_COUNT)
+
+    # -- stream -----------------------------------------------------------------------------
+    def start(self) -> None:
+        """Start the board's stream and the pump thread."""
+        self.rig.start_balance(self.sample_rate_hz)
+        identity = self.driver.identity
+        assert identity is not None
+        volts_per_count = np.asarray(identity.volts_per_count)
+        self._clip_low_v, self._clip_high_v = -32768 * volts_per_count, 32767 * volts_per_count
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._pump, name="live-balance", daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        """Stop the pump and the board's stream (the attached recorder, if any, stays open)."""
+        if self._thread is None:
+            return
+        self._stop.set()
+        self._thread.join(timeout=2.0)
+        self._thread = None
+        self.rig.stop_balance()
+
+    @property
+    def running(self) -> bool:
+        """True while the pump thread runs."""
+        return self._thread is not None and self._thread.is_alive()
+
+    def _pump(self) -> None:
+        try:
+            while not self._stop.is_set():
+                block = self.driver.get_block(timeout_s=GET_BLOCK_TIMEOUT_S)
+                if block is None:
+                    continue
+                self._deliver(block.counters, block.volts)
+        except BaseException as error:  # reported by health(); the display shows it
+            self.error = error
+
+    def _deliver(self, counters: np.ndarray, volts: np.ndarray) -> None:
+        analog = volts[:, :ANALOG_CHANNEL_COUNT]
+        self._clipped += ((analog <= self._clip_low_v) | (analog >= self._clip_high_v)).sum(axis=0)
+        with self._lock:
+            recorder, measurement = self._recorder, self._measurement
+        first_row: int | None = None
+        if recorder is not None:
+            first_row = recorder.next_sample_index
+            if recorder.put_block(counters, volts):
+                self._report_link_health(recorder)
+            else:
+                first_row = None
+        if measurement is not None and (measurement.recorder is None or first_row is not None):
+            measurement.add(volts, first_row)
+        self.display_feed.offer(counters, volts, self._rows_seen)
+        self._rows_seen += len(counters)
+
+    def _report_link_health(self, recorder: Recorder) -> None:
+        statistics = self.driver.statistics
+        crc, lost = statistics.crc_failures, statistics.lost_samples
+        if (crc, lost) != self._reported:
+            recorder.report_link_health(
+                crc_errors=max(0, crc - self._reported[0]),
+                lost_samples=max(0, lost - self._reported[1]),
+            )
+            self._reported = (crc, lost)
+
+    # -- recording --------------------------------------------------------------------------
+    def attach(self, recorder: Recorder) -> None:
+        """Send every following block to ``recorder`` (an entered :class:`Recorder`)."""
+        statistics = self.driver.statistics
+        with self._lock:
+            self._reported = (statistics.crc_failures, statistics.lost_samples)
+            self._recorder = recorder
+
+    def detach(self) -> Recorder | None:
+        """Stop sending blocks to the recorder; return it (the caller closes it)."""
+        with self._lock:
+            recorder, self._recorder = self._recorder, None
+        if recorder is not None:
+            self._recorder_lost_before += recorder.queue_lost_samples
+        return recorder
+
+    @property
+    def recorder(self) -> Recorder | None:
+        """The attached recorder, if any."""
+        return self._recorder
+
+    def measure(self, record_s: float, timeout_s: float) -> MeasuredRows:
+        """Average the next ``record_s`` of full-rate rows; blocks until they arrived (wall ``timeout_s``).
+
+        While a recorder is attached, only rows it accepted count and their row indices are returned, so the
+        caller can journal them as a set point.
+        """
+        if not self.running:
+            raise RuntimeError("the balance is not streaming: start() first")
+        rows = max(1, int(round(record_s * self.sample_rate_hz)))
+        with self._lock:
+            measurement = _Measurement(rows, self._recorder)
+            self._measurement = measurement
+        try:
+            if not measurement.done.wait(timeout_s):
+                if self.error is not None:
+                    raise self.error
+                raise TimeoutError(
+                    f"{self.driver.name}: {rows} rows did not arrive within {timeout_s:g} s"
+                )
+        finally:
+            with self._lock:
+                self._measurement = None
+        first = measurement.first_row_index
+        return MeasuredRows(
+            mean_volts=measurement.sums / measurement.rows,
+            rows=measurement.rows,
+            first_row_index=first,
+            last_row_index=None if first is None else first + measurement.rows - 1,
+        )
+
+    # -- status -----------------------------------------------------------------------------
+    def health(self) -> LinkHealth:
+        """Link health and clipping since the stream started (recorder losses over every recording)."""
+        statistics = self.driver.statistics
+        recorder = self._recorder
+        recorder_lost = self._recorder_lost_before + (
+            recorder.queue_lost_samples if recorder is not None else 0
+        )
+        return LinkHealth(
+            crc_errors=statistics.crc_failures,
+            link_lost_samples=statistics.lost_samples,
+            driver_dropped_blocks=self.driver.blocks_dropped,
+            recorder_lost_samples=recorder_lost,
+            clipped_samples=tuple(int(count) for count in self._clipped),
+        )

@@ -1,0 +1,93 @@
+"""Live view tab: six force/torque channels, hot-wire velocity, temperature, and the rig's set-point readings."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pyqtgraph as pg
+from PySide6 import QtWidgets
+
+from ornitail.gui.live_data import BALANCE_WINDOW_S, LiveData
+from ornitail.gui.plot_style import YRangeFollower, curve, live_plot, thinned
+
+READINGS_WINDOW_S = 60.0
+
+
+class LiveView(QtWidgets.QWidget):
+    """Plots of the newest seconds of data; :meth:`redraw` is called by the window's redraw timer."""
+
+    def __init__(self, data: LiveData, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.data = data
+        layout = QtWidgets.QVBoxLayout(self)
+        self.readout = QtWidgets.QLabel("not connected")
+        self.readout.setObjectName("liveReadout")
+        layout.addWidget(self.readout)
+        self.plots = pg.GraphicsLayoutWidget()
+        layout.addWidget(self.plots)
+        window = BALANCE_WINDOW_S
+        forces = live_plot(self.plots, 0, "Forces, body frame (decimated for display)", "N", window)
+        moments = live_plot(self.plots, 1, "Moments about the reference point", "N m", window)
+        flow = live_plot(self.plots, 2, "Hot-wire velocity and temperature", "m/s | degC", window)
+        rig = live_plot(self.plots, 3, "Set-point readings", "deg | m/s | Hz", READINGS_WINDOW_S)
+        self.followers = [YRangeFollower(plot) for plot in (forces, moments, flow, rig)]
+        self.load_curves = [curve(forces, i, name) for i, name in enumerate(("X", "Y", "Z"))] + [
+            curve(moments, i, name) for i, name in enumerate(("L", "M", "N"))
+        ]
+        self.hotwire_curve = curve(flow, 0, "hot-wire velocity (m/s)")
+        self.temperature_curve = curve(flow, 3, "temperature (degC)")
+        self.rig_curves = [
+            curve(rig, i, name)
+            for i, name in enumerate(
+                ("pitch (deg)", "tunnel speed (m/s)", "flapping frequency (Hz)")
+            )
+        ]
+
+    def redraw(self) -> None:
+        """One ``setData`` per curve from the rings (thinned to what the screen can show)."""
+        volts = self.data.volts()
+        if len(volts):
+            time_s = (np.arange(len(volts)) - len(volts)) / self.data.display_rate_hz
+            keep = thinned(len(volts))
+            time_s, shown = time_s[keep], volts[keep]
+            loads = self.data.loads(shown)
+            for index, item in enumerate(self.load_curves):
+                item.setData(time_s, loads[:, index])
+            self.followers[0].follow(loads[:, :3])
+            self.followers[1].follow(loads[:, 3:])
+            velocity = self.data.hotwire_velocity_m_s(shown)
+            temperature = self.data.temperature_c(shown)
+            if velocity is not None:
+                self.hotwire_curve.setData(time_s, velocity)
+            self.temperature_curve.setData(time_s, temperature)
+            self.followers[2].follow(temperature, *([] if velocity is None else [velocity]))
+        history = self.data.instruments.latest()
+        if len(history):
+            time_s = history[:, 0] - history[-1, 0]
+            values = (np.degrees(history[:, 1]), history[:, 2], history[:, 3])
+            for item, value in zip(self.rig_curves, values, strict=True):
+                item.setData(time_s, value)
+            self.followers[3].follow(*values)
+        self.readout.setText(self.readout_text(volts))
+
+    def readout_text(self, volts: np.ndarray) -> str:
+        """One line of the latest values with units."""
+        readings = self.data.session.readings
+        if not math.isfinite(readings.time_s):
+            return "not connected" if not self.data.session.connected else "waiting for readings"
+        parts = [
+            f"pitch {math.degrees(readings.pitch_rad):.2f} deg",
+            f"tunnel {readings.tunnel_velocity_m_s:.3f} m/s",
+            f"flapping {readings.flapping_frequency_hz:.2f} Hz",
+        ]
+        recent = volts[-int(max(1, 0.2 * self.data.display_rate_hz)) :] if len(volts) else volts
+        if len(recent):
+            velocity = self.data.hotwire_velocity_m_s(recent)
+            if velocity is not None:
+                parts.append(f"hot-wire {float(np.mean(velocity)):.3f} m/s")
+            parts.append(f"T {float(np.mean(self.data.temperature_c(recent))):.1f} degC")
+            x, _, z, _, m, _ = self.data.loads(recent).mean(axis=0)
+            tare = "" if self.data.session.tare_volts is not None else " (no tare)"
+            parts.append(f"X {x:+.4f} N  Z {z:+.4f} N  M {m:+.5f} N m{tare}")
+        return "   ".join(parts)

@@ -1,0 +1,182 @@
+"""Runs tab: the catalog of recordings, one run's set points, and processing with derivatives and intervals."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from PySide6 import QtWidgets
+
+from ornitail.acquisition.catalog import CatalogEntry, RunCatalog
+from ornitail.acquisition.recording_reader import load_recording
+from ornitail.balance.process_runs import process_runs
+from ornitail.gui.background_job import BackgroundJobs
+
+RUN_COLUMNS = (
+    "run id",
+    "status",
+    "tail",
+    "x_h (mm)",
+    "tailed",
+    "plan",
+    "set points",
+    "lost samples",
+)
+Z_95 = 1.959963984540054
+
+
+def _catalog_row(run: CatalogEntry) -> tuple[str, ...]:
+    x_h = "-" if run.x_h_m is None else f"{run.x_h_m * 1000:g}"
+    lost = run.queue_lost_samples + run.link_lost_samples
+    return (
+        run.run_id,
+        run.exit_status,
+        run.tail_id or "-",
+        x_h,
+        "yes" if run.tailed else "no",
+        run.plan_name,
+        str(run.set_point_count),
+        str(lost),
+    )
+
+
+def derivative_rows(configuration: dict[str, Any]) -> list[tuple[str, str, str, str]]:
+    """(name, value, 95 % interval, unit) of every estimable derivative of one processed configuration."""
+    rows = []
+    for name, item in configuration.get("derivatives", {}).get("derivatives", {}).items():
+        value, sigma = item["value"], item["sigma"]
+        if value is None or not math.isfinite(value):
+            continue
+        interval = (
+            "-"
+            if sigma is None or not math.isfinite(sigma)
+            else (f"[{value - Z_95 * sigma:.4g}, {value + Z_95 * sigma:.4g}]")
+        )
+        rows.append((name, f"{value:.4g}", interval, item["unit"]))
+    return rows
+
+
+class RunsTab(QtWidgets.QWidget):
+    """Catalog table, Open (set points of one run) and Process (the selected runs) buttons."""
+
+    def __init__(self, data_root: Path, on_problem: Callable[[str, str], None]) -> None:
+        super().__init__()
+        self.data_root = Path(data_root)
+        self.jobs = BackgroundJobs(on_problem, self)
+        self.runs: list[CatalogEntry] = []
+        self.last_result: dict[str, Any] | None = None
+        layout = QtWidgets.QVBoxLayout(self)
+        self.where = QtWidgets.QLabel(f"catalog of {self.data_root}")
+        layout.addWidget(self.where)
+        self.table = QtWidgets.QTableWidget(0, len(RUN_COLUMNS))
+        self.table.setHorizontalHeaderLabels(RUN_COLUMNS)
+        self.table.setSelectionBehavior(QtWidgets.QAbstractItemView.SelectionBehavior.SelectRows)
+        self.table.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
+        self.table.horizontalHeader().setStretchLastSection(True)
+        layout.addWidget(self.table, 2)
+        buttons = QtWidgets.QHBoxLayout()
+        self.reload_button = QtWidgets.QPushButton("Reload")
+        self.open_button = QtWidgets.QPushButton("Open run")
+        self.process_button = QtWidgets.QPushButton("Process selected runs")
+        for button in (self.reload_button, self.open_button, self.process_button):
+            buttons.addWidget(button)
+        layout.addLayout(buttons)
+        self.details = QtWidgets.QPlainTextEdit()
+        self.details.setReadOnly(True)
+        layout.addWidget(self.details, 1)
+        self.derivatives = QtWidgets.QTableWidget(0, 4)
+        self.derivatives.setHorizontalHeaderLabels(("derivative", "value", "95 % interval", "unit"))
+        self.derivatives.horizontalHeader().setStretchLastSection(True)
+        layout.addWidget(self.derivatives, 1)
+        self.reload_button.clicked.connect(self.reload)
+        self.open_button.clicked.connect(self.open_selected)
+        self.process_button.clicked.connect(self.process_selected)
+        self.reload()
+
+    def reload(self) -> None:
+        """Read the catalog again (newest run first)."""
+        if not (self.data_root / "catalog.sqlite").exists():
+            self.runs = []
+        else:
+            self.runs = sorted(
+                RunCatalog(self.data_root).find_runs(),
+                key=lambda run: run.start_time_utc,
+                reverse=True,
+            )
+        self.table.setRowCount(len(self.runs))
+        for row, run in enumerate(self.runs):
+            for column, text in enumerate(_catalog_row(run)):
+                self.table.setItem(row, column, QtWidgets.QTableWidgetItem(text))
+        self.table.resizeColumnsToContents()
+
+    def selected_runs(self) -> list[CatalogEntry]:
+        """The runs whose rows are selected, in catalog order."""
+        rows = sorted({index.row() for index in self.table.selectionModel().selectedRows()})
+        return [self.runs[row] for row in rows]
+
+    def open_selected(self) -> None:
+        """Show the first selected run's metadata summary and set points."""
+        runs = self.selected_runs()
+        if not runs:
+            return
+        recording = load_recording(self.data_root / runs[0].run_directory)
+        frame = recording.set_points_frame()
+        columns = [
+            c
+            for c in (
+                "plan_point_index",
+                "kind",
+                "sweep",
+                "pitch_rad",
+                "tunnel_velocity_m_s",
+                "flapping_frequency_hz",
+                "tail_attached",
+            )
+            if c in frame
+        ]
+        summary = {
+            k: recording.metadata.get(k)
+            for k in ("run_id", "exit_status", "failure_reason", "sample_count", "set_point_count")
+        }
+        self.details.setPlainText(
+            json.dumps(summary, indent=1) + "\n" + frame[columns].to_string(index=False)
+        )
+
+    def process_selected(self) -> None:
+        """Process the selected runs in the background; show derivatives with 95 % intervals."""
+        runs = self.selected_runs()
+        if not runs:
+            self.details.setPlainText(
+                "select the runs of one configuration (tailed and tailless) first"
+            )
+            return
+        directories = [self.data_root / run.run_directory for run in runs]
+        out = self.data_root / "processed" / f"{datetime.now(UTC):%Y%m%dT%H%M%SZ}"
+        self.details.setPlainText(f"processing {len(directories)} run(s) into {out} ...")
+        self.jobs.run(process_runs, self.show_processed, directories, out)
+
+    def show_processed(self, result: dict[str, Any]) -> None:
+        """Tail statements, warnings and the derivative table of the processed runs."""
+        self.last_result = result
+        lines = [f"cycle averages: {result['table_csv']}"] + list(result["warnings"])
+        rows = []
+        for configuration in result["configurations"]:
+            lines.append(f"configuration {configuration['configuration']}")
+            lines += [f"  {text}" for text in configuration.get("tail_statements", [])]
+            rows += derivative_rows(configuration)
+        self.details.setPlainText("\n".join(lines))
+        self.derivatives.setRowCount(len(rows))
+        for row, values in enumerate(rows):
+            for column, text in enumerate(values):
+                self.derivatives.setItem(row, column, QtWidgets.QTableWidgetItem(text))
+        self.derivatives.resizeColumnsToContents()
+
+    def latest_derivatives_files(self) -> list[str]:
+        """Derivative JSON files of the last processing (for the design tab's trends)."""
+        if self.last_result is None:
+            return []
+        return [path for path in self.last_result["written"] if path.endswith("-derivatives.json")]

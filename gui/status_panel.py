@@ -1,0 +1,87 @@
+"""The always-visible status strip: instruments, link health, saturation, recording, redraw rate."""
+
+from __future__ import annotations
+
+from PySide6 import QtWidgets
+
+from ornitail.acquisition.live_balance import LinkHealth
+from ornitail.gui.rig_session import RigSession
+
+OK_STYLE = "color: #1a7f37;"
+WARN_STYLE = "color: white; background: #cf222e; font-weight: bold; padding: 0 4px;"
+
+
+class StatusPanel(QtWidgets.QWidget):
+    """Labels updated by :meth:`refresh` at every redraw."""
+
+    def __init__(self, session: RigSession, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.session = session
+        layout = QtWidgets.QHBoxLayout(self)
+        layout.setContentsMargins(4, 0, 4, 0)
+        self.instruments = QtWidgets.QLabel()
+        self.link = QtWidgets.QLabel()
+        self.saturation = QtWidgets.QLabel()
+        self.recording = QtWidgets.QLabel()
+        self.frame_rate = QtWidgets.QLabel()
+        for label, name in (
+            (self.instruments, "instrumentStatus"),
+            (self.link, "linkHealth"),
+            (self.saturation, "saturation"),
+            (self.recording, "recordingStatus"),
+            (self.frame_rate, "frameRate"),
+        ):
+            label.setObjectName(name)
+            layout.addWidget(label)
+        layout.addStretch(1)
+
+    def refresh(self, frames_per_s: float) -> None:
+        """Show the session's current state."""
+        session = self.session
+        live = session.live
+        if session.rig is None:
+            self.instruments.setText("rig: not connected")
+            self.instruments.setStyleSheet("")
+        else:
+            streaming = (
+                "sweep owns the balance"
+                if session.sweep_running
+                else (
+                    "balance streaming" if live is not None and live.running else "balance stopped"
+                )
+            )
+            failure = live.error if live is not None else None
+            text = f"rig: {session.rig.description.name}, fan/strut/motor connected, {streaming}"
+            self.instruments.setText(text if failure is None else f"balance failed: {failure}")
+            self.instruments.setStyleSheet(OK_STYLE if failure is None else WARN_STYLE)
+        health = live.health() if live is not None else None
+        self._show_health(health)
+        recording = session.recording
+        if session.sweep_running:
+            self.recording.setText("SWEEP RUNNING")
+        elif recording is not None:
+            self.recording.setText(
+                f"RECORDING {recording.recorder.run_id} ({recording.points} points)"
+            )
+        else:
+            self.recording.setText("not recording")
+        self.recording.setStyleSheet(WARN_STYLE if recording or session.sweep_running else "")
+        self.frame_rate.setText(f"{frames_per_s:.0f} fps")
+
+    def _show_health(self, health: LinkHealth | None) -> None:
+        if health is None:
+            self.link.setText("link: -")
+            self.saturation.setText("saturation: -")
+            return
+        lost = health.link_lost_samples + health.recorder_lost_samples
+        self.link.setText(
+            f"link: CRC errors {health.crc_errors}, lost samples {health.link_lost_samples}, "
+            f"recorder lost {health.recorder_lost_samples}, dropped blocks {health.driver_dropped_blocks}"
+        )
+        bad = lost or health.crc_errors or health.driver_dropped_blocks
+        self.link.setStyleSheet(WARN_STYLE if bad else OK_STYLE)
+        saturated = health.saturated_channels
+        self.saturation.setText(
+            "SATURATED: " + ", ".join(saturated) if saturated else "no saturation"
+        )
+        self.saturation.setStyleSheet(WARN_STYLE if saturated else OK_STYLE)
