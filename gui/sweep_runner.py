@@ -12,8 +12,15 @@ import threading
 from collections.abc import Callable
 from pathlib import Path
 
+from ornitail.acquisition.catalog import RunCatalog
 from ornitail.acquisition.rig import Rig
-from ornitail.acquisition.sweep import SweepEvent, SweepResult, SweepStop, run_sweep
+from ornitail.acquisition.sweep import (
+    SweepEvent,
+    SweepResult,
+    SweepStop,
+    previous_sweep_chain,
+    run_sweep,
+)
 from ornitail.acquisition.sweep_plan import SweepPlan
 
 
@@ -39,6 +46,7 @@ class SweepRunner(threading.Thread):
         self.plan, self.rig, self.data_root, self.resume = plan, rig, data_root, resume
         self.stop_request = SweepStop()
         self._on_event, self._on_done, self._operator_prompt = on_event, on_done, operator_prompt
+        self._last_event: SweepEvent | None = None
         self._interruptible = True
         self._interrupt_lock = threading.Lock()
 
@@ -51,18 +59,33 @@ class SweepRunner(threading.Thread):
                 self.data_root,
                 resume=self.resume,
                 stop=self.stop_request,
-                on_event=self._on_event,
+                on_event=self._remember_and_pass_on,
                 operator_prompt=self._operator_prompt,
             )
             with self._interrupt_lock:  # an abort after this point must not interrupt anything else
                 self._interruptible = False
         except KeyboardInterrupt:
-            outcome = SweepResult(status="aborted", message="aborted by the operator")
+            outcome = self._aborted_result()
         except BaseException as error:  # handed to the window as a message
             outcome = error
         with self._interrupt_lock:
             self._interruptible = False
         self._on_done(outcome)
+
+    def _remember_and_pass_on(self, event: SweepEvent) -> None:
+        self._last_event = event
+        self._on_event(event)
+
+    def _aborted_result(self) -> SweepResult:
+        """What an abort left: the runs of this plan's chain and the points recorded so far."""
+        last = self._last_event
+        return SweepResult(
+            status="aborted",
+            run_directories=previous_sweep_chain(RunCatalog(self.data_root), self.plan),
+            completed_points=0 if last is None else last.completed,
+            total_points=len(self.plan.set_points),
+            message="aborted by the operator",
+        )
 
     def pause(self) -> None:
         """Finish the current set point, then end the run (resumable)."""
