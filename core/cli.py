@@ -35,6 +35,7 @@ def _register_area_commands() -> None:
     from ornitail.design.cli import design_group
     from ornitail.flight.campaign_cli import campaign_command
     from ornitail.flight.cli import flight_group
+    from ornitail.gap.cli import gap_group
     from ornitail.gui.cli import gui_command
     from ornitail.sim.cli import sim_group
 
@@ -43,6 +44,7 @@ def _register_area_commands() -> None:
     main.add_command(design_group)
     flight_group.add_command(campaign_command)
     main.add_command(flight_group)
+    main.add_command(gap_group)
     main.add_command(gui_command)
     main.add_command(process_command)
     main.add_command(runs_command)

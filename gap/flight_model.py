@@ -1,0 +1,80 @@
+"""The linear flight model a diagnosis compares with the data, and its response on a manoeuvre.
+
+States [q (rad/s), u, w (m/s), theta (rad)] as deviations from trim, input elevator (rad), in the
+body frame of docs/frames.md; dx/dt = A x + B delta_e, outputs = states. The response on a
+manoeuvre starts from the measured first sample and is driven by the measured elevator (zero-order
+hold), optionally delayed by ``delay_s`` and with a measured-theta drift ``theta_drift_rad_s``
+(rad/s) counted from the run-in's middle (the run-in mean is what the deviations are taken from).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.linalg import expm
+
+from ornitail.flight.linear_simulation import propagate
+from ornitail.gap.flight_data import FlightRun
+
+
+@dataclass(frozen=True)
+class LinearFlightModel:
+    """A, B of the longitudinal model (SI), the pitch inertia it uses and its trim.
+
+    ``iyy_kg_m2`` converts a pitch-damping change (N m s/rad) into A; NaN when the model file does
+    not declare it. ``theta0_rad`` and ``airspeed_m_s`` are the model's steady state (NaN when
+    unknown). ``delay_s`` and ``theta_drift_rad_s`` are measurement augmentations (zero for a
+    plain model).
+    """
+
+    a_matrix: np.ndarray
+    b_matrix: np.ndarray
+    iyy_kg_m2: float
+    theta0_rad: float
+    airspeed_m_s: float
+    delay_s: float = 0.0
+    theta_drift_rad_s: float = 0.0
+
+    def with_matrices(self, a_matrix: np.ndarray, b_matrix: np.ndarray) -> LinearFlightModel:
+        return replace(self, a_matrix=a_matrix, b_matrix=b_matrix)
+
+
+def _zero_order_hold(
+    a_matrix: np.ndarray, b_matrix: np.ndarray, step_s: float
+) -> tuple[np.ndarray, np.ndarray]:
+    size, inputs = b_matrix.shape
+    block = np.zeros((size + inputs, size + inputs))
+    block[:size, :size] = a_matrix
+    block[:size, size:] = b_matrix
+    discrete = expm(block * step_s)
+    return discrete[:size, :size], discrete[:size, size:]
+
+
+def simulate_runs(model: LinearFlightModel, runs: Sequence[FlightRun]) -> list[np.ndarray]:
+    """Predicted states (N, 4) of ``model`` on each manoeuvre (see the module docstring)."""
+    holds: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+    predictions = []
+    for run in runs:
+        step = round(run.time_step_s, 12)
+        if step not in holds:
+            holds[step] = _zero_order_hold(model.a_matrix, model.b_matrix, run.time_step_s)
+        predictions.append(_simulate(model, run, *holds[step]))
+    return predictions
+
+
+def _simulate(
+    model: LinearFlightModel, run: FlightRun, ad: np.ndarray, bd: np.ndarray
+) -> np.ndarray:
+    elevator = run.elevator_rad
+    if model.delay_s != 0.0:
+        elevator = np.interp(run.time_s - model.delay_s, run.time_s, run.elevator_rad)
+    start = run.states[0].copy()
+    drift = model.theta_drift_rad_s * (run.time_s - 0.5 * run.input_start_s)
+    start[3] -= drift[0]  # the measured first theta holds the drift; the motion starts without it
+    predicted = propagate(ad, elevator[:, None] @ bd.T, start)
+    predicted[:, 3] += drift
+    if not np.all(np.isfinite(predicted)):
+        return np.full_like(predicted, 1e6)
+    return predicted

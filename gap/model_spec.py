@@ -1,0 +1,107 @@
+"""The baseline-model file of a gap diagnosis (TOML, docs/gap-diagnosis.md).
+
+```toml
+[baseline]
+kind = "simulator"              # or "linear_model"
+tail = "S3"                     # study tail (simulator; also names the flight configuration)
+x_h_mm = 98                     # tail position, mm
+effects_off = ["added_mass"]    # simulator effects the baseline leaves out
+# model = "delfly_longitudinal" # linear_model: preset or flight model file (its start values)
+# candidates = ["added_mass", "input_delay"]   # optional: restrict the library
+```
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from ornitail.core.errors import UserInputError
+from ornitail.core.toml_table import TomlTable
+from ornitail.sim.effects import EFFECT_NAMES
+
+BASELINE_KINDS = ("simulator", "linear_model")
+
+
+@dataclass(frozen=True)
+class BaselineSpec:
+    """What the diagnosis compares the data with (see the module docstring)."""
+
+    kind: str
+    tail: str
+    x_h_mm: float
+    effects_off: tuple[str, ...] = ()
+    model: str = ""
+    candidates: tuple[str, ...] = ()
+    source: str = "baseline"
+
+
+def _names(table: TomlTable, key: str, known: tuple[str, ...] | None) -> tuple[str, ...]:
+    value = table.get(key, [])
+    if not isinstance(value, list) or not all(isinstance(item, str) for item in value):
+        raise UserInputError(table.where(key), f"{value!r} must be a list of names")
+    if known is not None:
+        for item in value:
+            if item not in known:
+                raise UserInputError(
+                    table.where(key), f"unknown effect {item!r}; known: {', '.join(known)}"
+                )
+    return tuple(value)
+
+
+def read_baseline_spec(path: str | Path) -> BaselineSpec:
+    """Read and check a baseline-model file; every mistake names the file and key."""
+    path = Path(path)
+    if not path.is_file():
+        raise UserInputError(str(path), "baseline model file not found")
+    try:
+        document = tomllib.loads(path.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+        raise UserInputError(str(path), f"not a readable TOML file: {error}") from None
+    unknown = sorted(set(document) - {"baseline"})
+    if unknown:
+        raise UserInputError(f"{path}: [{unknown[0]}]", "unknown table; expected [baseline]")
+    table = TomlTable(
+        path,
+        "baseline",
+        document.get("baseline"),
+        ("kind", "tail", "x_h_mm", "effects_off", "model", "candidates"),
+    )
+    kind = table.text("kind", choices=BASELINE_KINDS)
+    x_h_mm = table.number("x_h_mm", positive=True)
+    if not 20.0 <= x_h_mm <= 300.0:
+        raise UserInputError(table.where("x_h_mm"), f"{x_h_mm:g} mm is outside 20-300 mm")
+    model = ""
+    if kind == "linear_model":
+        model = table.text("model")
+        candidate_file = (path.parent / model).resolve()
+        if candidate_file.is_file():
+            model = str(candidate_file)
+    return BaselineSpec(
+        kind=kind,
+        tail=table.text("tail"),
+        x_h_mm=x_h_mm,
+        effects_off=_names(table, "effects_off", EFFECT_NAMES),
+        model=model,
+        candidates=_names(table, "candidates", None),
+        source=str(path),
+    )
+
+
+def write_baseline_spec(spec: BaselineSpec, path: str | Path) -> Path:
+    """Write ``spec`` as a baseline-model file (the inverse of :func:`read_baseline_spec`)."""
+    lines = [
+        "[baseline]",
+        f'kind = "{spec.kind}"',
+        f'tail = "{spec.tail}"',
+        f"x_h_mm = {spec.x_h_mm:g}",
+        "effects_off = [" + ", ".join(f'"{name}"' for name in spec.effects_off) + "]",
+    ]
+    if spec.model:
+        lines.append(f'model = "{spec.model}"')
+    if spec.candidates:
+        lines.append("candidates = [" + ", ".join(f'"{n}"' for n in spec.candidates) + "]")
+    path = Path(path)
+    path.write_text("\n".join(lines) + "\n")
+    return path

@@ -1,0 +1,126 @@
+"""Pictures of a diagnosis (PNG and PDF): residual spectra before/after, where, the ranking.
+
+Made from the report and the residual arrays the diagnosis returns, never from model internals.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from ornitail.gap.spectra import fft_length, residual_power  # noqa: E402
+
+
+def _save(figure: plt.Figure, folder: Path, name: str) -> list[str]:
+    paths = []
+    for suffix in ("png", "pdf"):
+        path = folder / f"{name}.{suffix}"
+        figure.savefig(path, dpi=120)
+        paths.append(str(path))
+    plt.close(figure)
+    return paths
+
+
+def residual_spectra_picture(
+    before: Sequence[np.ndarray],
+    after: Sequence[np.ndarray],
+    time_step_s: float,
+    channels: Sequence[str],
+    effect: str,
+    folder: Path,
+) -> list[str]:
+    """Residual power per channel on the withheld runs, baseline and with ``effect``."""
+    length = fft_length(before)
+    frequencies, power_before = residual_power(before, time_step_s, length)
+    _, power_after = residual_power(after, time_step_s, length)
+    figure, axes = plt.subplots(1, len(channels), figsize=(3.2 * len(channels), 3.2))
+    for index, (axis, channel) in enumerate(zip(np.atleast_1d(axes), channels, strict=True)):
+        keep = frequencies > 0
+        axis.semilogy(frequencies[keep], power_before[keep, index], label="baseline")
+        axis.semilogy(frequencies[keep], power_after[keep, index], label=f"+ {effect}")
+        axis.set_xlim(0, min(8.0, frequencies[-1]))
+        axis.set_xlabel("frequency (Hz)")
+        axis.set_title(channel)
+    np.atleast_1d(axes)[0].set_ylabel("residual power (normalised)")
+    np.atleast_1d(axes)[0].legend(fontsize=7)
+    figure.tight_layout()
+    return _save(figure, folder, "residual_spectra")
+
+
+def localisation_picture(where: dict[str, Any], folder: Path) -> list[str]:
+    """Bars: residual energy share by channel; by frequency band (flight) or the strongest
+    |correlation| with each configuration variable (tunnel); share by time segment or sweep."""
+    figure, axes = plt.subplots(1, 3, figsize=(11, 3.4))
+    channels = where["by_channel"]
+    axes[0].bar(list(channels), [item["energy_share"] for item in channels.values()])
+    axes[0].set_title("share by channel")
+    if where["by_band"]:
+        bands = where["by_band"]
+        labels = [f"{b['band_hz'][0]:g}-{b['band_hz'][1]:.3g}" for b in bands]
+        axes[1].bar(labels, [b["pooled_share"] for b in bands])
+        axes[1].set_title("share by band (Hz)")
+    else:
+        variables = {
+            name: max(abs(v["correlation"]) for v in item["per_load"].values())
+            for name, item in where["by_configuration"].items()
+            if item["varies"]
+        }
+        axes[1].bar(list(variables), list(variables.values()))
+        axes[1].set_title("|correlation| with configuration")
+    axes[1].tick_params(axis="x", labelsize=7)
+    segments = where["by_segment"]
+    axes[2].bar(
+        [name.replace("_", "\n") for name in segments],
+        [item["energy_share"] for item in segments.values()],
+    )
+    axes[2].set_title("share by segment")
+    figure.tight_layout()
+    return _save(figure, folder, "localisation")
+
+
+def ranking_picture(report: dict[str, Any], folder: Path) -> list[str]:
+    """Withheld closure of each candidate with its 90 % interval; the top set highlighted."""
+    ranking = report["ranking"]
+    figure, axis = plt.subplots(figsize=(7, 0.45 * len(ranking) + 1.2))
+    positions = np.arange(len(ranking))[::-1]
+    values = [entry["withheld_closure"] for entry in ranking]
+    errors = np.array(
+        [
+            [v - e["closure_interval"][0], e["closure_interval"][1] - v]
+            for v, e in zip(values, ranking, strict=True)
+        ]
+    ).T
+    colours = ["tab:red" if entry["in_top_set"] else "tab:gray" for entry in ranking]
+    axis.barh(positions, values, xerr=errors, color=colours)
+    axis.set_yticks(positions, [entry["name"] for entry in ranking])
+    axis.axvline(0.0, color="black", linewidth=0.8)
+    axis.set_xlabel("closure of the gap on withheld runs (1 - gap after / gap before)")
+    figure.tight_layout()
+    return _save(figure, folder, "ranking")
+
+
+def tunnel_residual_picture(
+    points: Any, before: np.ndarray, after: np.ndarray, effect: str, folder: Path
+) -> list[str]:
+    """Tunnel residual of each load against pitch, before (dots) and after ``effect`` (crosses),
+    coloured by tail position x_h."""
+    figure, axes = plt.subplots(1, 3, figsize=(11, 3.4))
+    theta_deg = np.degrees(points["theta_rad"].to_numpy())
+    colour = points["x_h_mm"].to_numpy()
+    for index, (axis, label) in enumerate(zip(axes, ("X (N)", "Z (N)", "M (N m)"), strict=True)):
+        dots = axis.scatter(theta_deg, before[:, index], c=colour, s=12, label="baseline")
+        axis.scatter(theta_deg, after[:, index], c=colour, s=18, marker="x", label=f"+ {effect}")
+        axis.axhline(0.0, color="black", linewidth=0.6)
+        axis.set_xlabel("pitch theta (deg)")
+        axis.set_title(f"residual {label}")
+    axes[0].legend(fontsize=7)
+    figure.colorbar(dots, ax=axes[-1], label="x_h (mm)")
+    figure.tight_layout()
+    return _save(figure, folder, "residuals_by_point")

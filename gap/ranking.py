@@ -1,0 +1,135 @@
+"""Ranking candidate effects on withheld data, with bootstrap confidence and indistinguishable sets.
+
+Inputs are per-run normalised squared residuals (run = a withheld manoeuvre or tunnel point).
+Closure = 1 - gap_after / gap_before, gap = sqrt(sum of normalised squared residuals / count).
+Order: held-out closure first; candidates the withheld data cannot separate from the best form
+the top *set* and are ordered among themselves by the drop of the residual-input correlation,
+then by AIC on the training data (which assumes white residuals, so it only breaks ties).
+
+Tied with the best: the best candidate's closure exceeds the other's in fewer than
+:data:`SEPARATION_PROBABILITY` of the bootstrap resamples of the withheld runs, or the two closures
+differ by less than :data:`IDENTICAL_CLOSURE` (the same model family, e.g. added mass and I_yy).
+An effect is *detected* when the best held-out closure is at least :data:`MIN_CLOSURE` and its
+bootstrap 5 % quantile at least :data:`MIN_CLOSURE_LOWER_BOUND`. These floors sit above what a
+linearised simulator baseline leaves on its own nonlinear data (a fitted pitch-damping change
+closes 5-12 % of that gap), so that no-effect data are not blamed on an effect.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+BOOTSTRAP_RESAMPLES = 1000
+SEPARATION_PROBABILITY = 0.95
+IDENTICAL_CLOSURE = 0.005
+MIN_CLOSURE = 0.15
+MIN_CLOSURE_LOWER_BOUND = 0.10
+
+
+@dataclass(frozen=True)
+class CandidateEvidence:
+    """One fitted candidate: magnitude, parameter count, and its residual energies.
+
+    ``heldout_sse`` is per withheld run; ``training_sse`` the training total;
+    ``input_correlation`` the mean over channels of the largest |residual-input correlation| on
+    the withheld data.
+    """
+
+    name: str
+    magnitude: float
+    unit: str
+    parameters: int
+    heldout_sse: np.ndarray
+    training_sse: float
+    input_correlation: float
+
+
+@dataclass(frozen=True)
+class RankedEffect:
+    name: str
+    magnitude: float
+    unit: str
+    heldout_closure: float
+    closure_interval: tuple[float, float]
+    training_closure: float
+    probability_best: float
+    input_correlation_drop: float
+    aic: float
+    in_top_set: bool
+
+
+@dataclass(frozen=True)
+class Ranking:
+    entries: list[RankedEffect]
+    top_set: tuple[str, ...]
+    top_set_confidence: float
+    detected: bool
+
+
+def _closures(base: np.ndarray, candidates: np.ndarray) -> np.ndarray:
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return 1.0 - np.sqrt(candidates / base[..., None])
+
+
+def _order_key(entry: RankedEffect) -> tuple[int, float, float]:
+    """Top set by input-correlation drop (to 1e-3), then AIC; the rest by held-out closure."""
+    if entry.in_top_set:
+        return (0, -round(entry.input_correlation_drop, 3), entry.aic)
+    return (1, -entry.heldout_closure, 0.0)
+
+
+def rank_candidates(
+    evidence: list[CandidateEvidence],
+    baseline_heldout_sse: np.ndarray,
+    baseline_training_sse: float,
+    baseline_input_correlation: float,
+    training_count: int,
+    seed: int = 0,
+) -> Ranking:
+    """Rank ``evidence`` (see the module docstring); ``training_count`` = training samples."""
+    runs = len(baseline_heldout_sse)
+    generator = np.random.default_rng(seed)
+    weights = generator.multinomial(runs, np.full(runs, 1.0 / runs), size=BOOTSTRAP_RESAMPLES)
+    heldout = np.array([item.heldout_sse for item in evidence])  # (K, R)
+    observed = _closures(np.array(baseline_heldout_sse.sum()), heldout.sum(axis=1))
+    resampled = _closures(weights @ baseline_heldout_sse, weights @ heldout.T)  # (B, K)
+    best = int(np.argmax(observed))
+    winners = np.argmax(resampled, axis=1)
+    tied = np.array(
+        [
+            index == best
+            or np.mean(resampled[:, best] > resampled[:, index]) < SEPARATION_PROBABILITY
+            or observed[best] - observed[index] < IDENTICAL_CLOSURE
+            for index in range(len(evidence))
+        ]
+    )
+    entries = []
+    for index, item in enumerate(evidence):
+        low, high = np.quantile(resampled[:, index], [0.05, 0.95])
+        training_closure = 1.0 - np.sqrt(item.training_sse / baseline_training_sse)
+        aic = training_count * np.log(item.training_sse / training_count) + 2 * item.parameters
+        entries.append(
+            RankedEffect(
+                name=item.name,
+                magnitude=item.magnitude,
+                unit=item.unit,
+                heldout_closure=float(observed[index]),
+                closure_interval=(float(low), float(high)),
+                training_closure=float(training_closure),
+                probability_best=float(np.mean(winners == index)),
+                input_correlation_drop=baseline_input_correlation - item.input_correlation,
+                aic=float(aic),
+                in_top_set=bool(tied[index]),
+            )
+        )
+    entries.sort(key=_order_key)
+    top_set = tuple(entry.name for entry in entries if entry.in_top_set)
+    top_indices = [index for index in range(len(evidence)) if tied[index]]
+    confidence = float(np.mean(np.isin(winners, top_indices)))
+    detected = bool(
+        observed[best] >= MIN_CLOSURE
+        and np.quantile(resampled[:, best], 0.05) >= MIN_CLOSURE_LOWER_BOUND
+    )
+    return Ranking(entries, top_set, confidence, detected)

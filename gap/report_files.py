@@ -1,0 +1,68 @@
+"""Running a diagnosis on files and writing its report (JSON, text) and pictures to a folder."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from pathlib import Path
+
+from ornitail.core.errors import UserInputError
+from ornitail.core.output import to_jsonable
+from ornitail.gap.flight_data import CHANNELS
+from ornitail.gap.flight_diagnosis import FlightDiagnosis, diagnose_flight, residuals_of
+from ornitail.gap.model_spec import read_baseline_spec
+from ornitail.gap.plots import localisation_picture, ranking_picture, residual_spectra_picture
+from ornitail.gap.report_text import render_report
+from ornitail.gap.tunnel_data import is_tunnel_table
+from ornitail.gap.tunnel_diagnosis import diagnose_tunnel
+
+
+def _flight_pictures(diagnosis: FlightDiagnosis, folder: Path) -> list[str]:
+    withheld = [diagnosis.runs[i] for i in diagnosis.withheld]
+    effect = diagnosis.report["best_candidate"]
+    written = residual_spectra_picture(
+        [r / diagnosis.scales for r in residuals_of(diagnosis.baseline, withheld)],
+        [r / diagnosis.scales for r in residuals_of(diagnosis.chosen, withheld)],
+        withheld[0].time_step_s,
+        CHANNELS,
+        effect,
+        folder,
+    )
+    return written
+
+
+def diagnose_files(
+    model_path: Path, data_paths: Sequence[Path], seed: int, out: Path, pictures: bool = True
+) -> dict[str, object]:
+    """Diagnose ``data_paths`` against the baseline file; write the report into ``out``."""
+    spec = read_baseline_spec(model_path)
+    for path in data_paths:
+        if not Path(path).is_file():
+            raise UserInputError(str(path), "data file not found")
+    tunnel = [is_tunnel_table(path) for path in data_paths]
+    if any(tunnel) and not all(tunnel):
+        raise UserInputError("--data", "give either flight logs or tunnel tables, not both")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise UserInputError(f"--out {out}", f"cannot create the folder: {error}") from None
+    written: list[str] = []
+    if all(tunnel):
+        diagnosis = diagnose_tunnel(spec, data_paths, seed)
+        report = diagnosis.report
+        if pictures:
+            written += diagnosis.pictures(out)
+    else:
+        flight = diagnose_flight(spec, data_paths, seed)
+        report = flight.report
+        if pictures:
+            written += _flight_pictures(flight, out)
+    if pictures:
+        written += localisation_picture(report["where"], out)
+        written += ranking_picture(report, out)
+    json_path, text_path = out / "gap-report.json", out / "gap-report.txt"
+    written = [str(json_path), str(text_path), *written]
+    report["written"] = written
+    json_path.write_text(json.dumps(to_jsonable(report), indent=1))
+    text_path.write_text(render_report(report) + "\n")
+    return report

@@ -1,0 +1,92 @@
+"""Tunnel cycle-averaged tables (``cycle-averages.csv`` of ``ornitail process``,
+docs/processed-tables.md) as the gap diagnosis reads them.
+
+Only tailed rows are used: their loads are about the tailed vehicle's CG, the point the simulator
+reports its aerodynamic loads about. Columns used: ``tail_id``, ``x_h_mm``, ``tailed``,
+``theta_deg``, ``v_m_s``, ``f_set_hz`` (or ``f_hall_hz`` when present), ``x_n``, ``z_n``,
+``m_n_m``, and optionally ``sweep``.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ornitail.core.errors import UserInputError
+
+LOAD_COLUMNS = ("x_n", "z_n", "m_n_m")
+LOAD_UNITS = ("N", "N", "N m")
+REQUIRED_COLUMNS = ("tail_id", "x_h_mm", "tailed", "theta_deg", "v_m_s", "f_set_hz", *LOAD_COLUMNS)
+MINIMUM_POINTS = 6
+
+
+def is_tunnel_table(path: str | Path) -> bool:
+    """True for a CSV whose header holds the cycle-average table's load and set-point columns."""
+    path = Path(path)
+    if path.suffix.lower() != ".csv":
+        return False
+    try:
+        header = pd.read_csv(path, nrows=0).columns
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, OSError):
+        return False
+    return {"x_n", "m_n_m", "theta_deg", "tail_id"} <= set(header)
+
+
+def _as_bool(value: object) -> bool:
+    if isinstance(value, bool | np.bool_):
+        return bool(value)
+    return str(value).strip().lower() in ("true", "1", "yes")
+
+
+def read_tunnel_points(paths: list[Path]) -> pd.DataFrame:
+    """Tailed set points of every table, checked: finite numbers, known ranges, enough points."""
+    frames = []
+    for path in paths:
+        table = pd.read_csv(path)
+        missing = [column for column in REQUIRED_COLUMNS if column not in table.columns]
+        if missing:
+            raise UserInputError(
+                str(path),
+                f"tunnel table lacks column(s) {', '.join(missing)} (see docs/processed-tables.md)",
+            )
+        table = table[table["tailed"].map(_as_bool)].copy()
+        frequency = "f_hall_hz" if "f_hall_hz" in table.columns else "f_set_hz"
+        for column in ("x_h_mm", "theta_deg", "v_m_s", frequency, *LOAD_COLUMNS):
+            values = pd.to_numeric(table[column], errors="coerce").to_numpy(float)
+            bad = np.flatnonzero(~np.isfinite(values))
+            if bad.size:
+                raise UserInputError(
+                    f"{path}: column {column}",
+                    f"value {table[column].iloc[bad[0]]!r} in data row {bad[0] + 1} is not a "
+                    "finite number",
+                )
+            table[column] = values
+        if ((table["v_m_s"] <= 0) | (table[frequency] <= 0)).any():
+            raise UserInputError(
+                str(path), "tailed rows need wind on and motor on (v_m_s > 0, frequency > 0)"
+            )
+        points = pd.DataFrame(
+            {
+                "source": str(path),
+                "tail_id": table["tail_id"].astype(str),
+                "x_h_mm": table["x_h_mm"],
+                "theta_rad": np.radians(table["theta_deg"]),
+                "v_m_s": table["v_m_s"],
+                "f_hz": table[frequency],
+                "sweep": table["sweep"].astype(str) if "sweep" in table.columns else "",
+                **{column: table[column] for column in LOAD_COLUMNS},
+            }
+        )
+        frames.append(points)
+    points = pd.concat(frames, ignore_index=True)
+    if len(points) < MINIMUM_POINTS:
+        raise UserInputError(
+            ", ".join(str(p) for p in paths),
+            f"{len(points)} tailed set point(s); the diagnosis needs at least {MINIMUM_POINTS}",
+        )
+    if not math.isfinite(float(points["x_h_mm"].min())):
+        raise UserInputError(str(paths[0]), "x_h_mm must be given for every row")
+    return points

@@ -1,0 +1,245 @@
+"""Diagnosis of tunnel cycle-averaged loads against the simulator's tunnel model.
+
+The baseline predicts each tailed set point's cycle-averaged X, Z, M about the CG with its effects
+switched off (:func:`ornitail.sim.tunnel.true_cycle_average`). Candidates:
+
+- each switched-off simulator effect that acts in the tunnel: prediction = baseline +
+  k x (effect on - effect off), k fitted by least squares (k = 1: the simulator's effect);
+- ``load_offset``: a constant offset per load (balance thermal drift, a tare error), 3 parameters.
+
+Residuals are normalised per load by the measured loads' standard deviation on the training points.
+Set points are split 70/30 with the seed; closures, intervals and the ranking are computed on the
+withheld points exactly as for flight data (:mod:`ornitail.gap.ranking`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy.stats import linregress
+
+from ornitail.core.errors import UserInputError
+from ornitail.design.geometry import study_tails
+from ornitail.gap.flight_data import split_runs
+from ornitail.gap.flight_diagnosis import assemble_report
+from ornitail.gap.intervals import gap_with_interval
+from ornitail.gap.model_spec import BaselineSpec
+from ornitail.gap.plots import tunnel_residual_picture
+from ornitail.gap.ranking import CandidateEvidence, rank_candidates
+from ornitail.gap.sparse_regression import sparse_terms
+from ornitail.gap.tunnel_data import LOAD_COLUMNS, LOAD_UNITS, read_tunnel_points
+from ornitail.gap.verdict import verdict_of
+from ornitail.sim.configuration import study_configuration
+from ornitail.sim.effects import EFFECT_SCOPES, EffectSet
+from ornitail.sim.tunnel import true_cycle_average
+
+CONFIGURATION_VARIABLES = ("S", "AR", "b", "x_h", "V", "theta", "f")
+
+
+@dataclass(frozen=True)
+class TunnelDiagnosis:
+    report: dict[str, object]
+    points: pd.DataFrame
+    residual_before: np.ndarray
+    residual_after: np.ndarray
+
+    def pictures(self, folder: Path) -> list[str]:
+        return tunnel_residual_picture(
+            self.points,
+            self.residual_before,
+            self.residual_after,
+            self.report["best_candidate"],
+            folder,
+        )
+
+
+def predict_loads(points: pd.DataFrame, effects: EffectSet) -> np.ndarray:
+    """Simulated cycle-averaged [X, Z, M] (N, N, N m) about the CG at every point."""
+    predictions = np.empty((len(points), 3))
+    configurations: dict[tuple[str, float], object] = {}
+    for index, row in enumerate(points.itertuples()):
+        key = (row.tail_id, row.x_h_mm)
+        if key not in configurations:
+            configurations[key] = study_configuration(row.tail_id, row.x_h_mm)
+        truth = true_cycle_average(
+            configurations[key], effects, row.theta_rad, row.v_m_s, row.f_hz, tail_attached=True
+        )
+        predictions[index] = (truth.aero_x_n, truth.aero_z_n, truth.aero_m_n_m)
+    return predictions
+
+
+def _configuration_table(points: pd.DataFrame) -> pd.DataFrame:
+    tails = study_tails()
+    geometry = {name: tails[name].geometry for name in points["tail_id"].unique()}
+    return pd.DataFrame(
+        {
+            "S": [geometry[t].area_m2 for t in points["tail_id"]],
+            "AR": [geometry[t].aspect_ratio for t in points["tail_id"]],
+            "b": [geometry[t].span_m for t in points["tail_id"]],
+            "x_h": points["x_h_mm"].to_numpy() / 1000.0,
+            "V": points["v_m_s"].to_numpy(),
+            "theta": points["theta_rad"].to_numpy(),
+            "f": points["f_hz"].to_numpy(),
+        }
+    )
+
+
+def _where(points: pd.DataFrame, residual: np.ndarray, scales: np.ndarray) -> dict[str, object]:
+    normalised = residual / scales
+    energy = np.sum(normalised**2, axis=0)
+    by_channel = {
+        load: {
+            "rms": float(np.sqrt(np.mean(residual[:, i] ** 2))),
+            "unit": LOAD_UNITS[i],
+            "rms_normalised": float(np.sqrt(np.mean(normalised[:, i] ** 2))),
+            "energy_share": float(energy[i] / energy.sum()),
+        }
+        for i, load in enumerate(LOAD_COLUMNS)
+    }
+    variables = _configuration_table(points)
+    by_configuration: dict[str, object] = {}
+    for name in CONFIGURATION_VARIABLES:
+        values = variables[name].to_numpy(float)
+        if not np.all(np.isfinite(values)) or np.ptp(values) <= 1e-12 or len(values) < 3:
+            by_configuration[name] = {"varies": False}
+            continue
+        per_load = {}
+        for i, load in enumerate(LOAD_COLUMNS):
+            fit = linregress(values, normalised[:, i])
+            per_load[load] = {
+                "slope_per_unit": float(fit.slope),
+                "correlation": float(fit.rvalue),
+                "p_value": float(fit.pvalue),
+            }
+        by_configuration[name] = {"varies": True, "per_load": per_load}
+    sweeps = {}
+    for sweep, rows in points.groupby("sweep"):
+        mask = points.index.isin(rows.index)
+        sweeps[str(sweep) or "all"] = {
+            "energy_share": float(np.sum(normalised[mask] ** 2) / energy.sum()),
+            "points": int(mask.sum()),
+        }
+    strongest = max(
+        (
+            (abs(item["per_load"][load]["correlation"]), name, load)
+            for name, item in by_configuration.items()
+            if item["varies"]
+            for load in LOAD_COLUMNS
+        ),
+        default=None,
+    )
+    channel = max(by_channel, key=lambda load: by_channel[load]["energy_share"])
+    summary = [
+        f"channel: {channel} carries {100 * by_channel[channel]['energy_share']:.0f} % of the "
+        f"normalised residual energy (RMS {by_channel[channel]['rms']:.3g} "
+        f"{by_channel[channel]['unit']})",
+    ]
+    if strongest is not None:
+        correlation, name, load = strongest
+        summary.append(
+            f"configuration: the {load} residual follows {name} most closely "
+            f"(correlation {by_configuration[name]['per_load'][load]['correlation']:+.2f}, "
+            f"p = {by_configuration[name]['per_load'][load]['p_value']:.2g})"
+        )
+    summary.append(
+        "by sweep: "
+        + ", ".join(f"{name} {100 * item['energy_share']:.0f} %" for name, item in sweeps.items())
+    )
+    return {
+        "by_channel": by_channel,
+        "by_band": [],
+        "by_segment": sweeps,
+        "by_configuration": by_configuration,
+        "input_locked_fraction": 1.0,
+        "summary": summary,
+    }
+
+
+def _pointer(points: pd.DataFrame, residual: np.ndarray) -> dict[str, object]:
+    variables = _configuration_table(points)
+    names = [name for name in CONFIGURATION_VARIABLES if np.ptp(variables[name].to_numpy()) > 0]
+    features = variables[names].to_numpy(float)
+    features = (
+        np.column_stack([features, features[:, names.index("theta")] ** 2])
+        if ("theta" in names)
+        else features
+    )
+    labels = names + (["theta^2"] if "theta" in names else [])
+    return {
+        f"{load}_residual": sparse_terms(features, residual[:, i], labels)
+        for i, load in enumerate(LOAD_COLUMNS)
+    }
+
+
+def diagnose_tunnel(spec: BaselineSpec, paths: Sequence[Path], seed: int) -> TunnelDiagnosis:
+    """Run the diagnosis of tunnel tables against ``spec`` (a simulator baseline)."""
+    if spec.kind != "simulator":
+        raise UserInputError(
+            f"{spec.source}: [baseline].kind", "tunnel tables need a simulator baseline"
+        )
+    points = read_tunnel_points(list(paths))
+    measured = points[list(LOAD_COLUMNS)].to_numpy(float)
+    effects = EffectSet().without(*spec.effects_off)
+    baseline = predict_loads(points, effects)
+    residual = measured - baseline
+    training, withheld = split_runs(len(points), seed)
+    scales = measured[training].std(axis=0)
+    scales = np.where(scales > 0, scales, 1.0)
+    directions = {}
+    for name in spec.effects_off:
+        if EFFECT_SCOPES[name] == "flight":
+            continue
+        step = predict_loads(points, effects.with_enabled(name)) - baseline
+        if np.max(np.abs(step / scales)) > 1e-9:
+            directions[name] = step
+    evidence, afters = [], {}
+    for name, step in directions.items():
+        x = (step[training] / scales).ravel()
+        y = (residual[training] / scales).ravel()
+        k = float(x @ y / (x @ x))
+        afters[name] = (residual - k * step, k, "x effect", 1)
+    y_train = residual[training] / scales
+    shift = y_train.mean(axis=0) * scales
+    afters["load_offset"] = (residual - shift, float(np.linalg.norm(shift)), "N (norm)", 3)
+    if spec.candidates:
+        afters = {name: item for name, item in afters.items() if name in spec.candidates}
+    base_sse = np.sum((residual / scales) ** 2, axis=1)
+    for name, (after, magnitude, unit, parameters) in afters.items():
+        sse = np.sum((after / scales) ** 2, axis=1)
+        evidence.append(
+            CandidateEvidence(
+                name, magnitude, unit, parameters, sse[withheld], float(sse[training].sum()), 0.0
+            )
+        )
+    ranking = rank_candidates(
+        evidence,
+        base_sse[withheld],
+        float(base_sse[training].sum()),
+        0.0,
+        len(training) * 3,
+        seed,
+    )
+    counts = np.ones(len(withheld))
+    best = ranking.entries[0].name
+    gap_before = gap_with_interval((residual[withheld] / scales) ** 2, counts, LOAD_COLUMNS, seed)
+    after = afters[best][0]
+    where = _where(points, residual, scales)
+    verdict = verdict_of(ranking, gap_before["total"], where["input_locked_fraction"])
+    report = assemble_report(
+        kind="tunnel",
+        spec=spec,
+        data_paths=paths,
+        run_counts={"total": len(points), "training": len(training), "withheld": len(withheld)},
+        ranking=ranking,
+        verdict=verdict,
+        gap_before=gap_before,
+        gap_after=gap_with_interval((after[withheld] / scales) ** 2, counts, LOAD_COLUMNS, seed),
+        where=where,
+        pointer=_pointer(points, residual),
+        seed=seed,
+    )
+    return TunnelDiagnosis(report, points, residual, after)
