@@ -47,6 +47,8 @@ RECORD_START_DELAY_S = 0.1
 """Rig time between settling and the first recorded row: covers the driver's ~10 ms block latency."""
 POLL_INTERVAL_S = 0.1
 """Rig time between readings while settling."""
+MAX_RETAKES = 3
+"""Times a set point's record is taken again when samples were lost inside it."""
 RECENT_BLOCKS_KEPT = 2000
 """Blocks whose counters the pump remembers (the driver delivers ~100 a second: minutes of backlog)."""
 
@@ -208,6 +210,21 @@ class _BalancePump(threading.Thread):
                 return first_row + int(np.searchsorted(counters, counter))
         return None
 
+    def samples_missing_in_rows(self, first_row: int, row_count: int) -> int:
+        """Samples the counters say were lost between rows ``first_row`` and ``first_row + row_count - 1``."""
+        with self._recent_rows_lock:
+            blocks = list(self._recent_rows)
+        last_row = first_row + row_count - 1
+        first_counter = last_counter = None
+        for block_first_row, counters in blocks:
+            if block_first_row <= first_row < block_first_row + len(counters):
+                first_counter = int(counters[first_row - block_first_row])
+            if block_first_row <= last_row < block_first_row + len(counters):
+                last_counter = int(counters[last_row - block_first_row])
+        if first_counter is None or last_counter is None:
+            raise RuntimeError(f"rows {first_row}..{last_row} are no longer remembered by the pump")
+        return last_counter - first_counter + 1 - row_count
+
     def _report_link_health(self) -> None:
         statistics = self.driver.statistics
         crc_errors, lost = statistics.crc_failures, statistics.lost_samples
@@ -318,6 +335,19 @@ def _settle(rig: Rig, point: SetPoint, criteria: SettleCriteria, pump: _BalanceP
         _wait_rig_s(rig, POLL_INTERVAL_S, pump)
 
 
+def _take_rows(rig: Rig, recorder: Recorder, pump: _BalancePump, count: int) -> int:
+    """Wait for ``count`` rows sampled from now on; return the first one's row index."""
+    _wait_rig_s(rig, RECORD_START_DELAY_S, pump)
+    samples_since_start = rig.balance_samples_since_start()
+    first = pump.first_row_sampled_after(samples_since_start)
+    while first is None:
+        _wait_rig_s(rig, 0.05, pump)
+        first = pump.first_row_sampled_after(samples_since_start)
+    while recorder.next_sample_index < first + count:
+        _wait_rig_s(rig, 0.05, pump)
+    return first
+
+
 def _record_point(
     rig: Rig,
     recorder: Recorder,
@@ -329,17 +359,18 @@ def _record_point(
     """Take the ``record_s`` of the stream sampled from now on as this point's rows and journal it.
 
     Rows still in transit (pty, driver queue) when the point settled were sampled before it settled; the board's
-    counter, not the arrival order, decides where the point begins.
+    counter, not the arrival order, decides where the point begins. A record with samples lost inside it (counter
+    gaps: an overloaded link) is taken again, up to ``MAX_RETAKES`` times; what the kept record lost is journalled
+    as ``samples_missing_in_record``.
     """
-    _wait_rig_s(rig, RECORD_START_DELAY_S, pump)
-    samples_since_start = rig.balance_samples_since_start()
-    first = pump.first_row_sampled_after(samples_since_start)
-    while first is None:
-        _wait_rig_s(rig, 0.05, pump)
-        first = pump.first_row_sampled_after(samples_since_start)
     count = int(round(point.record_s * sample_rate_hz))
-    while recorder.next_sample_index < first + count:
-        _wait_rig_s(rig, 0.05, pump)
+    retakes = 0
+    first = _take_rows(rig, recorder, pump, count)
+    missing = pump.samples_missing_in_rows(first, count)
+    while missing and retakes < MAX_RETAKES:
+        retakes += 1
+        first = _take_rows(rig, recorder, pump, count)
+        missing = pump.samples_missing_in_rows(first, count)
     record = SetPointRecord(
         plan_point_index=point.index,
         kind=point.kind,
@@ -354,6 +385,8 @@ def _record_point(
         motor_rpm_mean=rig.motor.read_rpm() if rig.motor is not None else None,
         extra={
             "sweep": point.sweep,
+            "retakes": retakes,
+            "samples_missing_in_record": missing,
             "pitch_measured_rad": rig.read_pitch_rad(),
             "tunnel_velocity_fan_m_s": rig.read_tunnel_velocity_m_s(),
         },

@@ -12,6 +12,7 @@ from typing import Any
 import click
 
 from ornitail.acquisition.catalog import default_data_root
+from ornitail.acquisition.recording_reader import load_recording
 from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE
 from ornitail.acquisition.sweep import (
@@ -95,14 +96,29 @@ def run_sweep_with_progress(
         )
 
 
+def run_link_health(run_directory: Path) -> dict[str, Any]:
+    """Link health of one run from its files: samples lost (counter gaps), CRC errors, retaken set points."""
+    recording = load_recording(run_directory)
+    metadata = recording.effective_metadata
+    return {
+        "run_directory": str(run_directory),
+        "samples_lost": int(metadata["counter_gaps"]["missing_samples"]),
+        "crc_errors": int(metadata["link_health"]["crc_errors"]),
+        "set_points_retaken": sum(
+            1 for record in recording.set_points if record.extra.get("retakes")
+        ),
+    }
+
+
 def sweep_result_record(result: SweepResult) -> dict[str, Any]:
-    """The JSON record of a sweep result."""
+    """The JSON record of a sweep result, with the link health of each run."""
     return {
         "status": result.status,
         "message": result.message,
         "completed_points": result.completed_points,
         "total_points": result.total_points,
         "run_directories": [str(path) for path in result.run_directories],
+        "link_health": [run_link_health(path) for path in result.run_directories],
     }
 
 
@@ -113,7 +129,13 @@ def exit_code_of(result: SweepResult) -> int:
 
 def _render(record: dict[str, Any]) -> str:
     lines = [f"sweep {record['status']}: {record['message']}"]
-    lines += [f"  run: {directory}" for directory in record["run_directories"]]
+    for health in record["link_health"]:
+        lines.append(f"  run: {health['run_directory']}")
+        if health["samples_lost"] or health["crc_errors"] or health["set_points_retaken"]:
+            lines.append(
+                f"    link: {health['samples_lost']} samples lost, {health['crc_errors']} CRC "
+                f"errors; {health['set_points_retaken']} set point(s) recorded again after losing samples"
+            )
     return "\n".join(lines)
 
 

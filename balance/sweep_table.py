@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ornitail.acquisition.counter_gaps import find_counter_gaps
 from ornitail.acquisition.recording_reader import Recording, load_recording
 from ornitail.balance.hall_cycles import HallEdgeSettings
 from ornitail.balance.point_loads import (
@@ -91,8 +92,16 @@ class MeasuredSetPoint:
     tare_id: str
 
     def gauge_and_hall_volts(self) -> tuple[np.ndarray, np.ndarray]:
-        """Raw gauge voltages (n, 6) and Hall line (n,) of the point, V."""
+        """Raw gauge voltages (n, 6) and Hall line (n,) of the point, V; a record with lost samples is refused
+        (cycle timing is taken from the row spacing)."""
         frame = self.recording.set_point_frame(int(self.row["set_point_index"]))
+        gaps = find_counter_gaps(frame["sample_counter"].to_numpy())
+        if gaps:
+            raise UserInputError(
+                f"{self.recording.run_directory}: set point {int(self.row['plan_point_index'])}",
+                f"{sum(gap.missing_samples for gap in gaps)} samples lost inside the record "
+                f"({len(gaps)} sample counter gap(s)); record the point again",
+            )
         return (
             frame[list(GAUGE_CHANNELS)].to_numpy(dtype=float),
             frame["hall_v"].to_numpy(dtype=float),

@@ -158,3 +158,43 @@ def test_unplugged_fan_fails_the_run_naming_it_and_keeps_what_was_recorded(simul
     simulated_rig.close(
         raise_errors=False
     )  # the fan is gone; the fixture's own close would report it again
+
+
+def test_a_record_that_loses_samples_is_taken_again_and_the_kept_one_is_whole(
+    simulated_rig, tmp_path
+):
+    """The board drops samples (an overloaded link) every 0.1 s of rig time for 1.5 s after the first point (a
+    wind-off tare) settles: the first 0.6 s record is bound to contain a gap, so the point is recorded again
+    until a record without one is kept (at most MAX_RETAKES = 3 times; the drops stop before the third)."""
+    plan = short_plan()
+    board = simulated_rig.simulators.daq_board
+    dropping = threading.Event()
+
+    def drop_for_a_while():
+        for _ in range(15):
+            board.drop_samples(25)
+            simulated_rig.wait_simulated_s(0.1)
+        dropping.set()
+
+    def on_event(event):
+        if event.stage == "settled" and event.completed == 0:
+            threading.Thread(target=drop_for_a_while, daemon=True).start()
+
+    result = run_sweep(plan, simulated_rig, tmp_path, on_event=on_event)
+    assert result.status == "completed"
+    assert dropping.wait(timeout=30)
+    tailed = load_recording(result.run_directories[0])
+    gaps = tailed.counter_gaps()
+    assert sum(gap.missing_samples for gap in gaps) >= 25  # samples were really lost on the link
+    frame = tailed.set_points_frame()
+    first_point = frame.iloc[0]
+    assert first_point["retakes"] >= 1
+    assert (frame["samples_missing_in_record"] == 0).all()
+    # No kept record spans a gap: every gap lies outside every point's rows.
+    for gap in gaps:
+        inside = (frame["first_sample_index"] < gap.row_index) & (
+            gap.row_index <= frame["last_sample_index"]
+        )
+        assert not inside.any()
+    measurements = [point for point in plan.set_points if point.kind == "measurement"]
+    assert len(cycle_averaged_table(result.run_directories)) == len(measurements)
