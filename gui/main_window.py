@@ -22,7 +22,7 @@ from ornitail.gui.runs_tab import RunsTab
 from ornitail.gui.status_panel import StatusPanel
 from ornitail.gui.sweep_panel import SweepPanel
 
-REDRAW_INTERVAL_MS = 33
+REDRAW_INTERVAL_MS = 30
 ESTOP_STYLE = "QPushButton { background: #cf222e; color: white; font-weight: bold; font-size: 16px; padding: 8px; }"
 
 
