@@ -77,15 +77,15 @@ def baseline_flight_model(spec: BaselineSpec) -> LinearFlightModel:
         configuration = study_configuration(spec.tail, spec.x_h_mm)
         return _simulator_model(configuration, baseline_effects(spec))
     model = load_model(spec.model)
-    if model.data_constants:
-        raise UserInputError(
-            f"{spec.source}: model", "constants taken from data are not supported here"
-        )
     if model.states != MODEL_STATES or model.inputs != ("elevator",):
         raise UserInputError(
             f"{spec.source}: model",
             f"{model.name} has states {list(model.states)} and inputs {list(model.inputs)}; "
             "the flight diagnosis needs states q, u, w, theta and input elevator",
+        )
+    if model.data_constants:
+        raise UserInputError(
+            f"{spec.source}: model", "constants taken from data are not supported here"
         )
     numeric = model.state_space(model.start_values(), model.constants)
     if not (np.allclose(numeric.c_matrix, np.eye(4)) and np.allclose(numeric.d_matrix, 0.0)):

@@ -60,8 +60,8 @@ def read_tunnel_points(paths: list[Path]) -> pd.DataFrame:
             if bad.size:
                 raise UserInputError(
                     f"{path}: column {column}",
-                    f"value {table[column].iloc[bad[0]]!r} in data row {bad[0] + 1} is not a "
-                    "finite number",
+                    f"value {table[column].iloc[bad[0]]!r} in data row {table.index[bad[0]] + 1} "
+                    "is not a finite number",
                 )
             table[column] = values
         if ((table["v_m_s"] <= 0) | (table[frequency] <= 0)).any():

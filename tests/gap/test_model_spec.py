@@ -1,0 +1,57 @@
+"""The baseline-model file and the baselines it names."""
+
+import numpy as np
+import pytest
+
+from ornitail.core.errors import UserInputError
+from ornitail.flight.model_file import load_model
+from ornitail.gap.flight_candidates import baseline_flight_model, flight_candidates
+from ornitail.gap.model_spec import BaselineSpec, read_baseline_spec, write_baseline_spec
+
+
+def test_written_spec_reads_back(tmp_path):
+    spec = BaselineSpec(
+        "simulator", "S5", 114.0, ("added_mass", "wake_profile"), "", ("iyy_shift",)
+    )
+    again = read_baseline_spec(write_baseline_spec(spec, tmp_path / "b.toml"))
+    assert (again.kind, again.tail, again.x_h_mm) == ("simulator", "S5", 114.0)
+    assert again.effects_off == spec.effects_off and again.candidates == ("iyy_shift",)
+
+
+@pytest.mark.parametrize(
+    ("text", "where"),
+    [
+        ('kind = "gp"\ntail = "S3"\nx_h_mm = 98', "kind"),
+        ('kind = "simulator"\ntail = "S3"\nx_h_mm = nan', "x_h_mm"),
+        ('kind = "simulator"\ntail = "S3"\nx_h_mm = 98\ncolour = 1', "colour"),
+        ('kind = "simulator"\ntail = "S3"\nx_h_mm = 98\neffects_off = "added_mass"', "effects_off"),
+    ],
+)
+def test_mistakes_name_the_key(tmp_path, text, where):
+    path = tmp_path / "b.toml"
+    path.write_text("[baseline]\n" + text + "\n")
+    with pytest.raises(UserInputError, match=where):
+        read_baseline_spec(path)
+
+
+def test_linear_model_baseline_uses_the_file_and_only_augmentations(tmp_path):
+    spec = BaselineSpec("linear_model", "S3", 98.0, model="delfly_longitudinal")
+    baseline = baseline_flight_model(spec)
+    preset = load_model("delfly_longitudinal")
+    expected = preset.state_space(preset.start_values(), preset.constants)
+    np.testing.assert_allclose(baseline.a_matrix, expected.a_matrix)
+    assert baseline.iyy_kg_m2 == pytest.approx(1.35066e-4)
+    names = {candidate.name for candidate in flight_candidates(spec, baseline)}
+    assert names == {"iyy_shift", "pitch_damping", "input_delay", "theta_drift"}
+
+
+def test_a_model_with_other_states_is_refused():
+    spec = BaselineSpec("linear_model", "S3", 98.0, model="twin_otter_short_period")
+    with pytest.raises(UserInputError, match="states q, u, w, theta"):
+        baseline_flight_model(spec)
+
+
+def test_an_unavailable_candidate_is_named():
+    spec = BaselineSpec("simulator", "S3", 98.0, ("added_mass",), candidates=("wake_profile",))
+    with pytest.raises(UserInputError, match="wake_profile"):
+        flight_candidates(spec, baseline_flight_model(spec))
