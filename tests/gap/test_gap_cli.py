@@ -1,6 +1,7 @@
 """``ornitail gap``: example, diagnose (text, JSON, files), bad input as one line with exit 2."""
 
 import json
+from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
@@ -128,7 +129,7 @@ def test_unknown_effect_in_the_model_file_is_named(tunnel_example, tmp_path):
 
 
 def test_nan_in_a_load_column_is_named(tunnel_example, tmp_path):
-    lines = open(tunnel_example["data"]).read().splitlines()
+    lines = Path(tunnel_example["data"]).read_text().splitlines()
     header = lines[0].split(",")
     row = lines[3].split(",")
     row[header.index("m_n_m")] = "nan"
