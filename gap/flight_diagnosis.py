@@ -28,11 +28,10 @@ from ornitail.gap.flight_candidates import (
 from ornitail.gap.flight_data import CHANNELS, FlightRun, read_flight_runs, split_runs
 from ornitail.gap.flight_localisation import localise_flight, sparse_pointer
 from ornitail.gap.flight_model import LinearFlightModel, simulate_runs
-from ornitail.gap.intervals import gap_with_interval
 from ornitail.gap.magnitude_fit import fit_magnitude
 from ornitail.gap.model_spec import BaselineSpec
-from ornitail.gap.ranking import CandidateEvidence, Ranking, rank_candidates
-from ornitail.gap.verdict import verdict_of
+from ornitail.gap.ranking import CandidateEvidence, rank_candidates
+from ornitail.gap.report import assemble_report
 
 DEFAULT_SEED = 2018
 
@@ -142,85 +141,19 @@ def diagnose_flight(
     all_residuals = residuals_of(baseline, runs)
     where = localise_flight(runs, all_residuals, scales, baseline)
     pointer = sparse_pointer(training, residuals_of(baseline, training), baseline)
-    gap_before = gap_with_interval(base_withheld, counts, CHANNELS, seed)
-    verdict = verdict_of(ranking, gap_before["total"], where["input_locked_fraction"])
-    chosen_name = ranking.entries[0].name
-    chosen_model, chosen_sse = fitted[chosen_name]
+    chosen_model, chosen_sse = fitted[ranking.entries[0].name]
     report = assemble_report(
         kind="flight",
         spec=spec,
         data_paths=data_paths,
         run_counts={"total": len(runs), "training": len(training), "withheld": len(withheld)},
         ranking=ranking,
-        verdict=verdict,
-        gap_before=gap_before,
-        gap_after=gap_with_interval(chosen_sse, counts, CHANNELS, seed),
+        channels=CHANNELS,
+        sample_counts=counts,
+        before_sse=base_withheld,
+        after_sse=chosen_sse,
         where=where,
         pointer=pointer,
         seed=seed,
     )
     return FlightDiagnosis(report, runs, withheld_index, baseline, chosen_model, scales)
-
-
-def assemble_report(
-    *,
-    kind: str,
-    spec: BaselineSpec,
-    data_paths: Sequence[str | Path],
-    run_counts: dict[str, int],
-    ranking: Ranking,
-    verdict: str,
-    gap_before: dict[str, object],
-    gap_after: dict[str, object],
-    where: dict[str, object],
-    pointer: dict[str, object],
-    seed: int,
-) -> dict[str, object]:
-    """The report's JSON fields (docs/gap-diagnosis.md) from the pieces of a diagnosis."""
-    top = ranking.entries[0]
-    return {
-        "format": "ornitail gap diagnosis",
-        "version": 1,
-        "data_kind": kind,
-        "baseline": {
-            "kind": spec.kind,
-            "tail": spec.tail,
-            "x_h_mm": spec.x_h_mm,
-            "effects_off": list(spec.effects_off),
-            "model": spec.model or None,
-            "source": spec.source,
-        },
-        "data": [str(path) for path in data_paths],
-        "seed": seed,
-        "runs": run_counts,
-        "verdict": verdict,
-        "effect": top.name if verdict == "effect" else None,
-        "indistinguishable_set": list(ranking.top_set) if verdict == "effect" else [],
-        "confidence": ranking.top_set_confidence if verdict == "effect" else None,
-        "magnitude": {"value": top.magnitude, "unit": top.unit},
-        "best_candidate": top.name,
-        "gap_before": gap_before,
-        "gap_after": gap_after,
-        "closure": {
-            "predicted_from_training": top.training_closure,
-            "realised_withheld": top.heldout_closure,
-            "interval": list(top.closure_interval),
-        },
-        "ranking": [
-            {
-                "name": entry.name,
-                "magnitude": entry.magnitude,
-                "unit": entry.unit,
-                "withheld_closure": entry.heldout_closure,
-                "closure_interval": list(entry.closure_interval),
-                "training_closure": entry.training_closure,
-                "probability_best": entry.probability_best,
-                "input_correlation_drop": entry.input_correlation_drop,
-                "aic": entry.aic,
-                "in_top_set": entry.in_top_set,
-            }
-            for entry in ranking.entries
-        ],
-        "where": where,
-        "sparse_regression": pointer,
-    }

@@ -25,14 +25,12 @@ from scipy.stats import linregress
 from ornitail.core.errors import UserInputError
 from ornitail.design.geometry import study_tails
 from ornitail.gap.flight_data import split_runs
-from ornitail.gap.flight_diagnosis import assemble_report
-from ornitail.gap.intervals import gap_with_interval
 from ornitail.gap.model_spec import BaselineSpec
 from ornitail.gap.plots import tunnel_residual_picture
 from ornitail.gap.ranking import CandidateEvidence, rank_candidates
+from ornitail.gap.report import assemble_report
 from ornitail.gap.sparse_regression import sparse_terms
 from ornitail.gap.tunnel_data import LOAD_COLUMNS, LOAD_UNITS, read_tunnel_points
-from ornitail.gap.verdict import verdict_of
 from ornitail.sim.configuration import study_configuration
 from ornitail.sim.effects import EFFECT_SCOPES, EffectSet
 from ornitail.sim.tunnel import true_cycle_average
@@ -223,22 +221,18 @@ def diagnose_tunnel(spec: BaselineSpec, paths: Sequence[Path], seed: int) -> Tun
         len(training) * 3,
         seed,
     )
-    counts = np.ones(len(withheld))
-    best = ranking.entries[0].name
-    gap_before = gap_with_interval((residual[withheld] / scales) ** 2, counts, LOAD_COLUMNS, seed)
-    after = afters[best][0]
-    where = _where(points, residual, scales)
-    verdict = verdict_of(ranking, gap_before["total"], where["input_locked_fraction"])
+    after = afters[ranking.entries[0].name][0]
     report = assemble_report(
         kind="tunnel",
         spec=spec,
         data_paths=paths,
         run_counts={"total": len(points), "training": len(training), "withheld": len(withheld)},
         ranking=ranking,
-        verdict=verdict,
-        gap_before=gap_before,
-        gap_after=gap_with_interval((after[withheld] / scales) ** 2, counts, LOAD_COLUMNS, seed),
-        where=where,
+        channels=LOAD_COLUMNS,
+        sample_counts=np.ones(len(withheld)),
+        before_sse=(residual[withheld] / scales) ** 2,
+        after_sse=(after[withheld] / scales) ** 2,
+        where=_where(points, residual, scales),
         pointer=_pointer(points, residual),
         seed=seed,
     )

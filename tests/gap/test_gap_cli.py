@@ -30,6 +30,23 @@ def tunnel_example(tmp_path_factory):
     return json.loads(result.output)
 
 
+def _diagnose(example: dict, out, *extra: str):
+    return CliRunner().invoke(
+        main,
+        [
+            "gap",
+            "diagnose",
+            "--model",
+            example["model"],
+            "--data",
+            example["data"],
+            "--out",
+            str(out),
+            *extra,
+        ],
+    )
+
+
 def test_diagnose_json_is_one_object_with_the_documented_keys(tunnel_example, tmp_path):
     result = CliRunner().invoke(
         main,

@@ -1,0 +1,86 @@
+"""The diagnosis report's fields (docs/gap-diagnosis.md), shared by flight and tunnel data."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from ornitail.gap.intervals import gap_with_interval
+from ornitail.gap.model_spec import BaselineSpec
+from ornitail.gap.ranking import Ranking
+from ornitail.gap.verdict import verdict_of
+
+
+def assemble_report(
+    *,
+    kind: str,
+    spec: BaselineSpec,
+    data_paths: Sequence[str | Path],
+    run_counts: dict[str, int],
+    ranking: Ranking,
+    channels: Sequence[str],
+    sample_counts: np.ndarray,
+    before_sse: np.ndarray,
+    after_sse: np.ndarray,
+    where: dict[str, object],
+    pointer: dict[str, object],
+    seed: int,
+) -> dict[str, object]:
+    """The report's JSON fields (docs/gap-diagnosis.md) from the pieces of a diagnosis.
+
+    ``before_sse`` and ``after_sse`` are the withheld runs' normalised squared residuals per
+    channel (runs, channels) of the baseline and of the top-ranked effect; ``sample_counts`` the
+    samples per withheld run.
+    """
+    top = ranking.entries[0]
+    gap_before = gap_with_interval(before_sse, sample_counts, channels, seed)
+    gap_after = gap_with_interval(after_sse, sample_counts, channels, seed)
+    verdict = verdict_of(ranking, gap_before["total"], where["input_locked_fraction"])
+    return {
+        "format": "ornitail gap diagnosis",
+        "version": 1,
+        "data_kind": kind,
+        "baseline": {
+            "kind": spec.kind,
+            "tail": spec.tail,
+            "x_h_mm": spec.x_h_mm,
+            "effects_off": list(spec.effects_off),
+            "model": spec.model or None,
+            "source": spec.source,
+        },
+        "data": [str(path) for path in data_paths],
+        "seed": seed,
+        "runs": run_counts,
+        "verdict": verdict,
+        "effect": top.name if verdict == "effect" else None,
+        "indistinguishable_set": list(ranking.top_set) if verdict == "effect" else [],
+        "confidence": ranking.top_set_confidence if verdict == "effect" else None,
+        "magnitude": {"value": top.magnitude, "unit": top.unit},
+        "best_candidate": top.name,
+        "gap_before": gap_before,
+        "gap_after": gap_after,
+        "closure": {
+            "predicted_from_training": top.training_closure,
+            "realised_withheld": top.heldout_closure,
+            "interval": list(top.closure_interval),
+        },
+        "ranking": [
+            {
+                "name": entry.name,
+                "magnitude": entry.magnitude,
+                "unit": entry.unit,
+                "withheld_closure": entry.heldout_closure,
+                "closure_interval": list(entry.closure_interval),
+                "training_closure": entry.training_closure,
+                "probability_best": entry.probability_best,
+                "input_correlation_drop": entry.input_correlation_drop,
+                "aic": entry.aic,
+                "in_top_set": entry.in_top_set,
+            }
+            for entry in ranking.entries
+        ],
+        "where": where,
+        "sparse_regression": pointer,
+    }
