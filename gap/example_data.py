@@ -90,6 +90,8 @@ def write_example(
     """Write the example data and baseline file into ``folder``; return their paths."""
     if not math.isfinite(x_h_mm):
         raise UserInputError("--x-h-mm", f"{x_h_mm!r} is not a finite number")
+    if kind == "flight":
+        check_effects({name: 0.0 if value is None else value for name, value in effects.items()})
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as error:
