@@ -1,16 +1,20 @@
-"""The balance stream outside a sweep: a display copy always, a recorder only while one is attached.
+"""The balance stream: a display copy always, a recorder while one is attached (sweeps and manual records).
 
 A pump thread takes every block from the DAQ driver. It hands it to the attached :class:`Recorder` (whose
 bounded queue never waits) and offers a decimated copy to a drop-oldest :class:`DisplayFeed`, so a slow or frozen
-display can never cost a recorded sample. :meth:`LiveBalance.measure` averages the next ``record_s`` of full-rate
-rows (a wind-off tare) and, while recording, names the rows it used, so a manual tare or measurement becomes a
-set point of the run exactly as a sweep's would. Link health (CRC failures, lost samples, writer-queue losses) and
-ADC clipping are counted here for a status display.
+display can never cost a recorded sample. While recording it remembers the sample counters of the recent rows, so
+a set point's rows are chosen by when the board *took* them (:meth:`LiveBalance.first_row_sampled_after`), not by
+when they reached the host, and a record with counter gaps is recognised (:meth:`LiveBalance.samples_missing_in_rows`).
+:meth:`LiveBalance.measure` averages the next ``record_s`` of full-rate rows (a wind-off tare) and, while
+recording, names the rows it used, so a manual tare or measurement becomes a set point of the run exactly as a
+sweep's would. Link health (CRC failures, lost samples, writer-queue losses) and ADC clipping are counted here for
+a status display.
 """
 
 from __future__ import annotations
 
 import threading
+from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,6 +27,8 @@ from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
 from ornitail.core.errors import UserInputError
 
 GET_BLOCK_TIMEOUT_S = 0.1
+RECENT_BLOCKS_KEPT = 2000
+"""Recorded blocks whose counters are remembered (the driver delivers ~100 a second: many seconds of backlog)."""
 
 
 @dataclass(frozen=True)
@@ -100,7 +106,13 @@ class LiveBalance:
         Blocks the display feed keeps before dropping the oldest.
     """
 
-    def __init__(self, rig: Rig, display_decimation: int = 10, display_capacity_blocks: int = 512):
+    def __init__(
+        self,
+        rig: Rig,
+        display_decimation: int = 10,
+        display_capacity_blocks: int = 512,
+        sample_rate_hz: float | None = None,
+    ):
         if not isinstance(rig.balance, SerialDaqDriver):
             raise UserInputError(
                 f"{rig.description.path}: [balance].route",
@@ -109,7 +121,7 @@ class LiveBalance:
         self.rig = rig
         self.driver: SerialDaqDriver = rig.balance
         self.display_feed = DisplayFeed(display_decimation, display_capacity_blocks)
-        self.sample_rate_hz = float(rig.description.serial_daq.sample_rate_hz)
+        self.sample_rate_hz = float(sample_rate_hz or rig.description.serial_daq.sample_rate_hz)
         self.error: BaseException | None = None
         self._recorder: Recorder | None = None
         self._measurement: _Measurement | None = None
@@ -121,10 +133,16 @@ class LiveBalance:
         self._recorder_lost_before = 0
         self._clipped = np.zeros(ANALOG_CHANNEL_COUNT, dtype=np.int64)
         self._clip_low_v = self._clip_high_v = np.zeros(ANALOG_CHANNEL_COUNT)
+        self._first_counter: int | None = None
+        self._recent_rows: deque[tuple[int, np.ndarray]] = deque(maxlen=RECENT_BLOCKS_KEPT)
 
     # -- stream -----------------------------------------------------------------------------
-    def start(self) -> None:
-        """Start the board's stream and the pump thread."""
+    def start(self, sample_rate_hz: float | None = None) -> None:
+        """Start the board's stream (at ``sample_rate_hz``, default: as constructed) and the pump thread."""
+        if sample_rate_hz is not None:
+            self.sample_rate_hz = float(sample_rate_hz)
+        self.error = None
+        self._first_counter = None
         self.rig.start_balance(self.sample_rate_hz)
         identity = self.driver.identity
         assert identity is not None
@@ -163,10 +181,14 @@ class LiveBalance:
         self._clipped += ((analog <= self._clip_low_v) | (analog >= self._clip_high_v)).sum(axis=0)
         with self._lock:
             recorder, measurement = self._recorder, self._measurement
+        if self._first_counter is None:
+            self._first_counter = int(counters[0])
         first_row: int | None = None
         if recorder is not None:
             first_row = recorder.next_sample_index
             if recorder.put_block(counters, volts):
+                with self._lock:
+                    self._recent_rows.append((first_row, counters))
                 self._report_link_health(recorder)
             else:
                 first_row = None
@@ -191,6 +213,7 @@ class LiveBalance:
         statistics = self.driver.statistics
         with self._lock:
             self._reported = (statistics.crc_failures, statistics.lost_samples)
+            self._recent_rows.clear()  # row indices belong to one recorder
             self._recorder = recorder
 
     def detach(self) -> Recorder | None:
@@ -205,6 +228,42 @@ class LiveBalance:
     def recorder(self) -> Recorder | None:
         """The attached recorder, if any."""
         return self._recorder
+
+    def raise_if_failed(self) -> None:
+        """Raise the pump's error (an unplugged board, a failed recorder), if it ended with one."""
+        if self.error is not None:
+            raise self.error
+
+    def first_row_sampled_after(self, samples_since_start: int) -> int | None:
+        """Row index (in the attached recorder) of the first recorded sample the board took at least
+        ``samples_since_start`` samples after the stream's first (counters continue across streams); None until
+        such a sample has been recorded."""
+        with self._lock:
+            if self._first_counter is None:
+                return None
+            counter = self._first_counter + samples_since_start
+            blocks = list(self._recent_rows)
+        for first_row, counters in blocks:
+            if counters[-1] >= counter:
+                return first_row + int(np.searchsorted(counters, counter))
+        return None
+
+    def samples_missing_in_rows(self, first_row: int, row_count: int) -> int:
+        """Samples the counters say were lost between recorded rows ``first_row`` and ``first_row + row_count - 1``."""
+        with self._lock:
+            blocks = list(self._recent_rows)
+        last_row = first_row + row_count - 1
+        first_counter = last_counter = None
+        for block_first_row, counters in blocks:
+            if block_first_row <= first_row < block_first_row + len(counters):
+                first_counter = int(counters[first_row - block_first_row])
+            if block_first_row <= last_row < block_first_row + len(counters):
+                last_counter = int(counters[last_row - block_first_row])
+        if first_counter is None or last_counter is None:
+            raise RuntimeError(
+                f"rows {first_row}..{last_row} are no longer remembered by the balance stream"
+            )
+        return last_counter - first_counter + 1 - row_count
 
     def measure(self, record_s: float, timeout_s: float) -> MeasuredRows:
         """Average the next ``record_s`` of full-rate rows; blocks until they arrived (wall ``timeout_s``).

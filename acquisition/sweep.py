@@ -19,27 +19,21 @@ from __future__ import annotations
 
 import math
 import threading
-from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from itertools import groupby
 from pathlib import Path
 
-import numpy as np
-
 from ornitail.acquisition.catalog import RunCatalog, RunFilter
-from ornitail.acquisition.daq_protocol import CHANNEL_NAMES
 from ornitail.acquisition.instrument_errors import InstrumentError
+from ornitail.acquisition.live_balance import LiveBalance, balance_stream_layout
 from ornitail.acquisition.recorder import Recorder, RunAborted
 from ornitail.acquisition.recording_layout import (
-    ChannelSpec,
     RunConfiguration,
     SetPointRecord,
-    StreamLayout,
 )
 from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.run_files import read_journal
-from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
 from ornitail.acquisition.sweep_plan import SetPoint, SettleCriteria, SweepPlan, limit_violations
 from ornitail.core.errors import UserInputError
 
@@ -49,8 +43,6 @@ POLL_INTERVAL_S = 0.1
 """Rig time between readings while settling."""
 MAX_RETAKES = 3
 """Times a set point's record is taken again when samples were lost inside it."""
-RECENT_BLOCKS_KEPT = 2000
-"""Blocks whose counters the pump remembers (the driver delivers ~100 a second: minutes of backlog)."""
 
 
 class SweepStop:
@@ -162,88 +154,6 @@ def completed_plan_points(run_directories: Iterable[Path]) -> set[int]:
     }
 
 
-class _BalancePump(threading.Thread):
-    """Moves blocks from the balance driver to the recorder and reports link health as increments.
-
-    It remembers the sample counters of the recent rows it handed over, so a set point's rows can be chosen
-    by the board's counter (when they were sampled) rather than by when they reached the host.
-    """
-
-    def __init__(self, driver: SerialDaqDriver, recorder: Recorder) -> None:
-        super().__init__(name="balance-pump", daemon=True)
-        self.driver, self.recorder = driver, recorder
-        self.error: BaseException | None = None
-        self._stop_event = threading.Event()
-        self._reported_crc_errors = 0
-        self._reported_lost_samples = 0
-        self._recent_rows: deque[tuple[int, np.ndarray]] = deque(maxlen=RECENT_BLOCKS_KEPT)
-        self._recent_rows_lock = threading.Lock()
-        self._first_counter: int | None = None
-
-    def run(self) -> None:
-        try:
-            while not self._stop_event.is_set():
-                block = self.driver.get_block(timeout_s=0.1)
-                if block is None:
-                    self.driver.raise_if_failed()
-                    continue
-                first_row = self.recorder.next_sample_index
-                if self.recorder.put_block(block.counters, block.volts):
-                    with self._recent_rows_lock:
-                        if self._first_counter is None:
-                            self._first_counter = int(block.counters[0])
-                        self._recent_rows.append((first_row, block.counters))
-                self._report_link_health()
-        except BaseException as error:  # handed to the sweep thread, which raises it
-            self.error = error
-
-    def first_row_sampled_after(self, samples_since_start: int) -> int | None:
-        """Row index of the first recorded sample taken at least ``samples_since_start`` samples after the
-        stream's first (counters continue across streams); None until such a sample has arrived."""
-        with self._recent_rows_lock:
-            if self._first_counter is None:
-                return None
-            counter = self._first_counter + samples_since_start
-            blocks = list(self._recent_rows)
-        for first_row, counters in blocks:
-            if counters[-1] >= counter:
-                return first_row + int(np.searchsorted(counters, counter))
-        return None
-
-    def samples_missing_in_rows(self, first_row: int, row_count: int) -> int:
-        """Samples the counters say were lost between rows ``first_row`` and ``first_row + row_count - 1``."""
-        with self._recent_rows_lock:
-            blocks = list(self._recent_rows)
-        last_row = first_row + row_count - 1
-        first_counter = last_counter = None
-        for block_first_row, counters in blocks:
-            if block_first_row <= first_row < block_first_row + len(counters):
-                first_counter = int(counters[first_row - block_first_row])
-            if block_first_row <= last_row < block_first_row + len(counters):
-                last_counter = int(counters[last_row - block_first_row])
-        if first_counter is None or last_counter is None:
-            raise RuntimeError(f"rows {first_row}..{last_row} are no longer remembered by the pump")
-        return last_counter - first_counter + 1 - row_count
-
-    def _report_link_health(self) -> None:
-        statistics = self.driver.statistics
-        crc_errors, lost = statistics.crc_failures, statistics.lost_samples
-        if crc_errors != self._reported_crc_errors or lost != self._reported_lost_samples:
-            self.recorder.report_link_health(
-                crc_errors=crc_errors - self._reported_crc_errors,
-                lost_samples=lost - self._reported_lost_samples,
-            )
-            self._reported_crc_errors, self._reported_lost_samples = crc_errors, lost
-
-    def raise_if_failed(self) -> None:
-        if self.error is not None:
-            raise self.error
-
-    def stop(self) -> None:
-        self._stop_event.set()
-        self.join(timeout=2.0)
-
-
 @dataclass
 class _SweepContext:
     plan: SweepPlan
@@ -251,6 +161,7 @@ class _SweepContext:
     stop: SweepStop
     on_event: Callable[[SweepEvent], None]
     completed: int
+    stream: LiveBalance
     durations_s: list[float] = field(default_factory=list)
 
     def eta_s(self) -> float:
@@ -276,13 +187,13 @@ def _move(rig: Rig, point: SetPoint) -> None:
     rig.set_flapping_frequency(point.flapping_frequency_hz)
 
 
-def _wait_rig_s(rig: Rig, seconds: float, pump: _BalancePump) -> None:
+def _wait_rig_s(rig: Rig, seconds: float, stream: LiveBalance) -> None:
     """Wait ``seconds`` of rig time, checking the balance stream for errors."""
     rig.wait_simulated_s(seconds)
-    pump.raise_if_failed()
+    stream.raise_if_failed()
 
 
-def _settle(rig: Rig, point: SetPoint, criteria: SettleCriteria, pump: _BalancePump) -> float:
+def _settle(rig: Rig, point: SetPoint, criteria: SettleCriteria, stream: LiveBalance) -> float:
     """Wait until pitch, velocity and frequency stay within tolerance; return the rig time it took, s."""
     targets = (
         (
@@ -332,26 +243,26 @@ def _settle(rig: Rig, point: SetPoint, criteria: SettleCriteria, pump: _BalanceP
             stable_since_s = now_s
         elif now_s - stable_since_s >= criteria.stable_for_s:
             return now_s - started_s
-        _wait_rig_s(rig, POLL_INTERVAL_S, pump)
+        _wait_rig_s(rig, POLL_INTERVAL_S, stream)
 
 
-def _take_rows(rig: Rig, recorder: Recorder, pump: _BalancePump, count: int) -> int:
+def _take_rows(rig: Rig, recorder: Recorder, stream: LiveBalance, count: int) -> int:
     """Wait for ``count`` rows sampled from now on; return the first one's row index."""
-    _wait_rig_s(rig, RECORD_START_DELAY_S, pump)
+    _wait_rig_s(rig, RECORD_START_DELAY_S, stream)
     samples_since_start = rig.balance_samples_since_start()
-    first = pump.first_row_sampled_after(samples_since_start)
+    first = stream.first_row_sampled_after(samples_since_start)
     while first is None:
-        _wait_rig_s(rig, 0.05, pump)
-        first = pump.first_row_sampled_after(samples_since_start)
+        _wait_rig_s(rig, 0.05, stream)
+        first = stream.first_row_sampled_after(samples_since_start)
     while recorder.next_sample_index < first + count:
-        _wait_rig_s(rig, 0.05, pump)
+        _wait_rig_s(rig, 0.05, stream)
     return first
 
 
 def _record_point(
     rig: Rig,
     recorder: Recorder,
-    pump: _BalancePump,
+    stream: LiveBalance,
     point: SetPoint,
     sample_rate_hz: float,
     settle_s: float,
@@ -365,12 +276,12 @@ def _record_point(
     """
     count = int(round(point.record_s * sample_rate_hz))
     retakes = 0
-    first = _take_rows(rig, recorder, pump, count)
-    missing = pump.samples_missing_in_rows(first, count)
+    first = _take_rows(rig, recorder, stream, count)
+    missing = stream.samples_missing_in_rows(first, count)
     while missing and retakes < MAX_RETAKES:
         retakes += 1
-        first = _take_rows(rig, recorder, pump, count)
-        missing = pump.samples_missing_in_rows(first, count)
+        first = _take_rows(rig, recorder, stream, count)
+        missing = stream.samples_missing_in_rows(first, count)
     record = SetPointRecord(
         plan_point_index=point.index,
         kind=point.kind,
@@ -404,14 +315,7 @@ def _run_tail_state(
 ) -> str:
     """Record ``points`` (all of one tail state) into one new run; return its run id."""
     plan, rig = context.plan, context.rig
-    balance = rig.balance
-    assert isinstance(balance, SerialDaqDriver)
-    stream = StreamLayout(
-        channels=[ChannelSpec(name, "V") for name in CHANNEL_NAMES],
-        sample_rate_hz=plan.sample_rate_hz,
-        sample_dtype="float32",
-        counter_dtype="uint32",
-    )
+    layout = balance_stream_layout(plan.sample_rate_hz)
     configuration = RunConfiguration(
         tail_id=plan.tail_id,
         x_h_m=plan.x_h_m,
@@ -434,15 +338,17 @@ def _run_tail_state(
     with Recorder(
         data_root,
         configuration,
-        stream,
+        layout,
         rig_description=rig_description,
         calibration_files=calibration_files,
         display_decimation=None,
     ) as recorder:
         run_directories.append(recorder.run_directory)
-        rig.start_balance(plan.sample_rate_hz)
-        pump = _BalancePump(balance, recorder)
-        pump.start()
+        stream = context.stream
+        if not stream.running or stream.sample_rate_hz != plan.sample_rate_hz:
+            stream.stop()
+            stream.start(plan.sample_rate_hz)
+        stream.attach(recorder)
         try:
             for point in points:
                 if context.stop.requested:
@@ -450,15 +356,14 @@ def _run_tail_state(
                 started_s = rig.now_s()
                 context.emit("moving", point)
                 _move(rig, point)
-                settle_s = _settle(rig, point, plan.settle, pump)
+                settle_s = _settle(rig, point, plan.settle, stream)
                 context.emit("settled", point)
-                _record_point(rig, recorder, pump, point, plan.sample_rate_hz, settle_s)
+                _record_point(rig, recorder, stream, point, plan.sample_rate_hz, settle_s)
                 context.completed += 1
                 context.durations_s.append(rig.now_s() - started_s)
                 context.emit("recorded", point)
         finally:
-            pump.stop()
-            rig.stop_balance()
+            stream.detach()
         return recorder.run_id
 
 
@@ -471,6 +376,7 @@ def run_sweep(
     stop: SweepStop | None = None,
     on_event: Callable[[SweepEvent], None] | None = None,
     operator_prompt: Callable[[str], None] | None = None,
+    balance_stream: LiveBalance | None = None,
 ) -> SweepResult:
     """Run ``plan`` on a connected ``rig``, recording under ``data_root``.
 
@@ -490,6 +396,9 @@ def run_sweep(
         Receives a :class:`SweepEvent` at every stage (progress bars, GUIs).
     operator_prompt : callable, optional
         Called with an instruction when a person must act (fit or remove the tail on a real rig).
+    balance_stream : LiveBalance, optional
+        A balance stream that feeds a display (the GUI's); the sweep records through it and leaves it
+        streaming. Without one the sweep streams the balance itself and stops it at the end.
 
     Raises
     ------
@@ -515,7 +424,10 @@ def run_sweep(
     if not remaining:
         result.message = "nothing to do: every set point of this plan is already recorded"
         return result
-    context = _SweepContext(plan, rig, stop, on_event or (lambda event: None), completed=len(done))
+    stream = balance_stream or LiveBalance(rig, sample_rate_hz=plan.sample_rate_hz)
+    context = _SweepContext(
+        plan, rig, stop, on_event or (lambda event: None), completed=len(done), stream=stream
+    )
     previous_run_id = chain[-1].name if chain else None
     rig.mount_vehicle(plan.tail_id, plan.x_h_m)
     try:
@@ -532,6 +444,8 @@ def run_sweep(
     except InstrumentError as error:
         result.status, result.message = "failed", str(error)
     finally:
+        if balance_stream is None:
+            stream.stop()
         rig.safe_state()
         result.completed_points = context.completed
     if result.status == "completed":

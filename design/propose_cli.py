@@ -97,6 +97,23 @@ def _interval_dict(
     return result
 
 
+def extrapolation_notes(proposal: Proposal, trend_model: TrendModel) -> dict[str, str]:
+    """Trend name -> why the proposal lies outside that trend's fitted data (only those that do)."""
+    geometry = proposal.geometry
+    vector = (
+        geometry.span_m,
+        geometry.leading_edge_span_m,
+        geometry.root_chord_m,
+        geometry.tip_chord_m,
+        proposal.x_h_m,
+    )
+    return {
+        name: prediction.extrapolation_note
+        for name, prediction in trend_model.predict(vector).items()
+        if prediction.outside_fitted_range
+    }
+
+
 def proposal_result(proposal: Proposal, trend_model: TrendModel) -> dict[str, Any]:
     """The proposal as a plain dict with user-facing units (mm, cm^2, deg) in the field names."""
     evaluation = proposal.evaluation
@@ -144,6 +161,7 @@ def proposal_result(proposal: Proposal, trend_model: TrendModel) -> dict[str, An
         "iyy_kg_m2": quantities["iyy_kg_m2"].value,
         "mass_source": list(quantities["mass_kg"].sources),
         "max_extrapolation_mahalanobis": evaluation.max_extrapolation,
+        "extrapolation_notes": extrapolation_notes(proposal, trend_model),
         "trend_sources": sorted({s for t in trend_model.trends.values() for s in t.sources}),
         "starts_tried": proposal.starts_tried,
         "starts_converged": proposal.starts_converged,
@@ -196,6 +214,11 @@ def render_proposal(result: dict[str, Any]) -> str:
     lines.append(
         f"largest extrapolation (Mahalanobis): {result['max_extrapolation_mahalanobis']:.3g}"
     )
+    names_by_note: dict[str, list[str]] = {}
+    for name, note in result["extrapolation_notes"].items():
+        names_by_note.setdefault(note, []).append(name)
+    for note, names in names_by_note.items():
+        lines.append(f"  extrapolated {', '.join(names)}: {note}")
     for name, path in result.get("files", {}).items():
         lines.append(f"{name}: {path}")
     return "\n".join(lines)

@@ -40,6 +40,8 @@ from ornitail.design.trend_data import ALL_QUANTITIES, TrendObservation
 _CONSTANT_FEATURE_RELATIVE_SPREAD = 1e-9
 _RANK_TOLERANCE = 1e-10
 _LEVERAGE_ONE = 1e-10
+_RANGE_EDGE_RELATIVE_TOLERANCE = 1e-6
+"""A design on the edge of the fitted range (where the range constraint holds it, to solver tolerance) is inside."""
 
 
 @dataclass(frozen=True)
@@ -153,7 +155,8 @@ class QuantityTrend:
         for index, value, low, high in zip(
             varying, point, self.feature_min, self.feature_max, strict=True
         ):
-            if value < low or value > high:
+            tolerance = _RANGE_EDGE_RELATIVE_TOLERANCE * max(abs(low), abs(high), 1e-12)
+            if value < low - tolerance or value > high + tolerance:
                 notes.append(
                     f"{names[index]} = {value:.4g} outside the fitted {low:.4g}..{high:.4g}"
                 )

@@ -342,12 +342,14 @@ class RigSession:
         recording = self.recording
         if recording is None:
             return
-        self.recording = None
-        if self.live is not None:
-            self.live.detach()
-        if abort_reason is not None:
-            recording.recorder.mark_aborted(abort_reason)
-        recording.recorder.__exit__(None, None, None)
+        try:
+            if self.live is not None:
+                self.live.detach()
+            if abort_reason is not None:
+                recording.recorder.mark_aborted(abort_reason)
+            recording.recorder.__exit__(None, None, None)
+        finally:  # only once the stop record is written: the window reads this as "run closed"
+            self.recording = None
         status = "aborted" if abort_reason else "completed"
         self.post(
             "info",
@@ -356,7 +358,7 @@ class RigSession:
 
     # -- sweeps -----------------------------------------------------------------------------
     def start_sweep(self, plan_file: Path, resume: bool = False) -> Future:
-        """Run (or resume) a sweep plan; the live balance pauses while the sweep owns the stream."""
+        """Run (or resume) a sweep plan; it records through the live balance stream, so the display goes on."""
         return self.submit("sweep", self._start_sweep, Path(plan_file), resume)
 
     def _start_sweep(self, plan_file: Path, resume: bool) -> None:
@@ -365,13 +367,12 @@ class RigSession:
         if self.recording is not None:
             raise UserInputError("sweep", "a manual recording is running: stop it first")
         plan = load_plan(plan_file)
-        assert self.live is not None
-        self.live.stop()
         self.sweep = SweepRunner(
             plan,
             rig,
             self.data_root,
             resume=resume,
+            balance_stream=self.live,
             on_event=lambda event: self.post("sweep_event", _event_text(event), event),
             on_done=self._sweep_done,
             operator_prompt=self._operator_prompt,

@@ -13,6 +13,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from ornitail.acquisition.catalog import RunCatalog
+from ornitail.acquisition.live_balance import LiveBalance
 from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.sweep import (
     SweepEvent,
@@ -27,6 +28,7 @@ from ornitail.acquisition.sweep_plan import SweepPlan
 class SweepRunner(threading.Thread):
     """One sweep of ``plan`` on ``rig`` into ``data_root``, in its own thread.
 
+    ``balance_stream`` is the window's live stream (the sweep records through it, so the display goes on).
     ``on_event`` gets every :class:`SweepEvent`, ``on_done`` the :class:`SweepResult` (or the exception that
     ended the sweep), both called in this thread; ``operator_prompt`` must block until the person has acted.
     """
@@ -38,12 +40,14 @@ class SweepRunner(threading.Thread):
         data_root: Path,
         *,
         resume: bool,
+        balance_stream: LiveBalance | None,
         on_event: Callable[[SweepEvent], None],
         on_done: Callable[[SweepResult | BaseException], None],
         operator_prompt: Callable[[str], None],
     ) -> None:
         super().__init__(name="sweep", daemon=True)
         self.plan, self.rig, self.data_root, self.resume = plan, rig, data_root, resume
+        self.balance_stream = balance_stream
         self.stop_request = SweepStop()
         self._on_event, self._on_done, self._operator_prompt = on_event, on_done, operator_prompt
         self._last_event: SweepEvent | None = None
@@ -61,6 +65,7 @@ class SweepRunner(threading.Thread):
                 stop=self.stop_request,
                 on_event=self._remember_and_pass_on,
                 operator_prompt=self._operator_prompt,
+                balance_stream=self.balance_stream,
             )
             with self._interrupt_lock:  # an abort after this point must not interrupt anything else
                 self._interruptible = False

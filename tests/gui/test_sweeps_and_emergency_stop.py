@@ -64,6 +64,10 @@ def test_abort_pause_resume_complete_and_process_a_sweep(connected, qtbot, tmp_p
     _run_plan(window, qtbot, tmp_path, panel.run_button)
     qtbot.waitUntil(lambda: panel.progress.value() >= 2, timeout=60_000)
     assert panel.eta.text().startswith("ETA ") and "SWEEP RUNNING" in window.status.recording.text()
+    # The sweep records through the window's balance stream: the live view keeps moving while it runs.
+    rows = window.data.rows_received
+    qtbot.waitUntil(lambda: window.data.rows_received > rows + 1000, timeout=10_000)
+    assert window.session.sweep_running
     panel.abort_button.click()  # now: the point in progress is dropped
     aborted = _wait_done(window, qtbot)
     assert aborted.status == "aborted" and 2 <= aborted.completed_points < TOTAL_POINTS
@@ -88,7 +92,7 @@ def test_abort_pause_resume_complete_and_process_a_sweep(connected, qtbot, tmp_p
         for index in load_recording(directory).set_points_frame()["plan_point_index"]
     )
     assert indices == list(range(TOTAL_POINTS))  # every point once, none repeated
-    # The live view streams again after the sweep handed the balance back.
+    # The live view still streams after the sweep.
     rows = window.data.rows_received
     qtbot.waitUntil(lambda: window.data.rows_received > rows + 1000, timeout=10_000)
     runs_tab = window.runs_tab
