@@ -7,7 +7,7 @@ baseline file; and diagnoses the files blind. Case kinds repeat in the order of 
 (no effect, each single effect, two pairs). Everything derives from one seed.
 
 Scores: top-1 = an effect is reported and the reported set holds a true effect; top-3 = every true
-effect is in the reported set or the first three of the ranking; false alarm = a no-effect case
+effect is in the reported set, the second effect's set or the first three of the ranking; false alarm = a no-effect case
 not reported as ``none``; magnitude error |k - k_true| / |k_true| of the true effect's fitted
 magnitude (single-effect cases named correctly); closure achieved by the reported effect next to
 the closure the true effect's candidate achieved; confusion matrix of single-effect and no-effect
@@ -83,7 +83,12 @@ def run_case(case: WithheldCase, folder: Path, seed: int) -> dict[str, object]:
     ranking = report["ranking"]
     names = [entry["name"] for entry in ranking]
     reported = set(report["indistinguishable_set"]) if report["verdict"] == "effect" else set()
-    first_three = reported | set(names[:3]) if report["verdict"] == "effect" else set()
+    second = report.get("second_effect") or {}
+    first_three = (
+        reported | set(names[:3]) | set(second.get("indistinguishable_set", []))
+        if report["verdict"] == "effect"
+        else set()
+    )
     by_name = {entry["name"]: entry for entry in ranking}
     result: dict[str, object] = {
         "tail": case.tail,
@@ -93,6 +98,7 @@ def run_case(case: WithheldCase, folder: Path, seed: int) -> dict[str, object]:
         "verdict": report["verdict"],
         "reported": report["effect"],
         "reported_set": sorted(reported),
+        "second_effect": second.get("effect"),
         "top1": bool(truth) and bool(reported & set(truth)),
         "top3": bool(truth) and set(truth) <= first_three,
         "closure_reported": report["closure"]["realised_withheld"],

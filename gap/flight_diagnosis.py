@@ -13,7 +13,7 @@ manoeuvres, so q, u, w and theta weigh alike.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -27,10 +27,10 @@ from ornitail.gap.flight_candidates import (
 )
 from ornitail.gap.flight_data import CHANNELS, FlightRun, read_flight_runs, split_runs
 from ornitail.gap.flight_localisation import localise_flight, sparse_pointer
-from ornitail.gap.flight_model import LinearFlightModel, simulate_runs
+from ornitail.gap.flight_model import LinearFlightModel, simulate_runs, superpose
 from ornitail.gap.magnitude_fit import fit_magnitude
 from ornitail.gap.model_spec import BaselineSpec
-from ornitail.gap.ranking import CandidateEvidence, rank_candidates
+from ornitail.gap.ranking import CandidateEvidence, Ranking, rank_candidates
 from ornitail.gap.report import assemble_report
 
 DEFAULT_SEED = 2018
@@ -85,13 +85,110 @@ def _input_correlation(
 
 
 def _fit(
-    candidate: FlightCandidate, training: Sequence[FlightRun], scales: np.ndarray
+    family: Callable[[float], LinearFlightModel],
+    bounds: tuple[float, float],
+    training: Sequence[FlightRun],
+    scales: np.ndarray,
 ) -> tuple[float, LinearFlightModel]:
     def cost(magnitude: float) -> float:
-        return float(_channel_sse(residuals_of(candidate.build(magnitude), training), scales).sum())
+        return float(_channel_sse(residuals_of(family(magnitude), training), scales).sum())
 
-    magnitude, _ = fit_magnitude(cost, candidate.bounds)
-    return magnitude, candidate.build(magnitude)
+    magnitude, _ = fit_magnitude(cost, bounds)
+    return magnitude, family(magnitude)
+
+
+@dataclass(frozen=True)
+class _Split:
+    training: list[FlightRun]
+    withheld: list[FlightRun]
+    scales: np.ndarray
+    reference_rms: np.ndarray
+    seed: int
+
+
+def _fit_pair(
+    first: FlightCandidate,
+    first_magnitude: float,
+    second: FlightCandidate,
+    baseline: LinearFlightModel,
+    split: _Split,
+) -> tuple[float, LinearFlightModel]:
+    """Both magnitudes by coordinate descent (second, first, second), from the first's own fit."""
+    magnitudes = [first_magnitude, 0.0]
+    for index in (1, 0, 1):
+        candidate = (first, second)[index]
+
+        def family(k: float, index: int = index) -> LinearFlightModel:
+            pair = [*magnitudes]
+            pair[index] = k
+            return superpose(baseline, first.build(pair[0]), second.build(pair[1]))
+
+        magnitudes[index], model = _fit(family, candidate.bounds, split.training, split.scales)
+    return magnitudes[1], model
+
+
+def _score_library(
+    library: Sequence[FlightCandidate],
+    start: LinearFlightModel,
+    baseline: LinearFlightModel,
+    split: _Split,
+    first: tuple[FlightCandidate, float] | None = None,
+) -> tuple[Ranking, dict[str, tuple[LinearFlightModel, np.ndarray]], np.ndarray]:
+    """Fit every candidate on the training runs and rank them on the withheld runs against
+    ``start``: alone (``first`` None, ``start`` = ``baseline``), or together with the ``first``
+    (candidate, magnitude) whose model is ``start``, both magnitudes refitted.
+
+    Returns the ranking, each candidate's model and withheld per-channel squared residuals, and
+    ``start``'s withheld per-channel squared residuals.
+    """
+    start_residuals = residuals_of(start, split.withheld)
+    start_sse = _channel_sse(start_residuals, split.scales)
+    evidence, fitted = [], {}
+    for candidate in library:
+        if first is None:
+            magnitude, model = _fit(candidate.build, candidate.bounds, split.training, split.scales)
+        else:
+            magnitude, model = _fit_pair(*first, candidate, baseline, split)
+        residuals = residuals_of(model, split.withheld)
+        fitted[candidate.name] = (model, _channel_sse(residuals, split.scales))
+        evidence.append(
+            CandidateEvidence(
+                name=candidate.name,
+                magnitude=magnitude,
+                unit=candidate.unit,
+                parameters=1,
+                heldout_sse=fitted[candidate.name][1].sum(axis=1),
+                training_sse=float(
+                    _channel_sse(residuals_of(model, split.training), split.scales).sum()
+                ),
+                input_correlation=_input_correlation(
+                    residuals, split.withheld, split.reference_rms
+                ),
+            )
+        )
+    ranking = rank_candidates(
+        evidence,
+        start_sse.sum(axis=1),
+        float(_channel_sse(residuals_of(start, split.training), split.scales).sum()),
+        _input_correlation(start_residuals, split.withheld, split.reference_rms),
+        int(sum(len(run.time_s) for run in split.training) * len(CHANNELS)),
+        split.seed,
+    )
+    return ranking, fitted, start_sse
+
+
+def _second_effect(ranking: Ranking | None) -> dict[str, object] | None:
+    """A second effect found on top of the first (closure counted from the first)."""
+    if ranking is None or not ranking.detected:
+        return None
+    top = ranking.entries[0]
+    return {
+        "effect": top.name,
+        "indistinguishable_set": list(ranking.top_set),
+        "magnitude": {"value": top.magnitude, "unit": top.unit},
+        "closure_beyond_first": top.heldout_closure,
+        "closure_interval": list(top.closure_interval),
+    }
 
 
 def diagnose_flight(
@@ -107,37 +204,19 @@ def diagnose_flight(
     scales = np.where(scales > 0, scales, 1.0)
     counts = np.array([len(run.time_s) for run in withheld], dtype=float)
 
-    base_training = _channel_sse(residuals_of(baseline, training), scales).sum()
     base_withheld_residuals = residuals_of(baseline, withheld)
-    base_withheld = _channel_sse(base_withheld_residuals, scales)
     reference_rms = np.sqrt(np.mean(np.concatenate(base_withheld_residuals) ** 2, axis=0))
     reference_rms = np.where(reference_rms > 0, reference_rms, 1.0)
-    base_correlation = _input_correlation(base_withheld_residuals, withheld, reference_rms)
-
-    evidence, fitted = [], {}
-    for candidate in flight_candidates(spec, baseline):
-        magnitude, model = _fit(candidate, training, scales)
-        residuals = residuals_of(model, withheld)
-        fitted[candidate.name] = (model, _channel_sse(residuals, scales))
-        evidence.append(
-            CandidateEvidence(
-                name=candidate.name,
-                magnitude=magnitude,
-                unit=candidate.unit,
-                parameters=1,
-                heldout_sse=fitted[candidate.name][1].sum(axis=1),
-                training_sse=float(_channel_sse(residuals_of(model, training), scales).sum()),
-                input_correlation=_input_correlation(residuals, withheld, reference_rms),
-            )
-        )
-    ranking = rank_candidates(
-        evidence,
-        base_withheld.sum(axis=1),
-        float(base_training),
-        base_correlation,
-        int(sum(len(run.time_s) for run in training) * len(CHANNELS)),
-        seed,
-    )
+    library = flight_candidates(spec, baseline)
+    split = _Split(training, withheld, scales, reference_rms, seed)
+    ranking, fitted, base_withheld = _score_library(library, baseline, baseline, split)
+    second = None
+    if ranking.detected:
+        top = ranking.entries[0]
+        first = (next(c for c in library if c.name == top.name), top.magnitude)
+        rest = [c for c in library if c.name not in ranking.top_set]
+        if rest:
+            second, _, _ = _score_library(rest, fitted[top.name][0], baseline, split, first)
     all_residuals = residuals_of(baseline, runs)
     where = localise_flight(runs, all_residuals, scales, baseline)
     pointer = sparse_pointer(training, residuals_of(baseline, training), baseline)
@@ -156,4 +235,5 @@ def diagnose_flight(
         pointer=pointer,
         seed=seed,
     )
+    report["second_effect"] = _second_effect(second)
     return FlightDiagnosis(report, runs, withheld_index, baseline, chosen_model, scales)

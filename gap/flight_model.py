@@ -41,6 +41,21 @@ class LinearFlightModel:
         return replace(self, a_matrix=a_matrix, b_matrix=b_matrix)
 
 
+def superpose(
+    baseline: LinearFlightModel, first: LinearFlightModel, second: LinearFlightModel
+) -> LinearFlightModel:
+    """Both changes from ``baseline`` at once: A, B, delay and drift changes added."""
+    return replace(
+        first,
+        a_matrix=first.a_matrix + second.a_matrix - baseline.a_matrix,
+        b_matrix=first.b_matrix + second.b_matrix - baseline.b_matrix,
+        delay_s=first.delay_s + second.delay_s - baseline.delay_s,
+        theta_drift_rad_s=first.theta_drift_rad_s
+        + second.theta_drift_rad_s
+        - baseline.theta_drift_rad_s,
+    )
+
+
 def _zero_order_hold(
     a_matrix: np.ndarray, b_matrix: np.ndarray, step_s: float
 ) -> tuple[np.ndarray, np.ndarray]:

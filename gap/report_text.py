@@ -28,6 +28,14 @@ def render_report(report: dict[str, Any]) -> str:
             f"indistinguishable set {{{', '.join(report['indistinguishable_set'])}}}, "
             f"confidence {report['confidence']:.2f}"
         )
+        second = report.get("second_effect")
+        if second:
+            lines.append(
+                f"second effect on top of it: {second['effect']} (magnitude "
+                f"{second['magnitude']['value']:.4g} {second['magnitude']['unit']}, set "
+                f"{{{', '.join(second['indistinguishable_set'])}}}, closes a further "
+                f"{second['closure_beyond_first']:.3f} of the remaining gap)"
+            )
     elif report["verdict"] == "unexplained":
         lines.append(
             "effect: unexplained (no candidate closes the gap; see the sparse-regression pointer)"

@@ -68,3 +68,11 @@ def test_input_delay_is_named_and_its_size_recovered(tmp_path):
     assert report["effect"] == "input_delay"
     # the delay is resolved to a fraction of the 1/64 s step by interpolation; 15 % = 10 ms
     assert report["magnitude"]["value"] == pytest.approx(0.07, rel=0.15)
+
+
+def test_a_second_effect_is_found_on_top_of_the_first(tmp_path):
+    case = WithheldCase("S3", 105.0, {"pitch_damping": 0.6, "theta_drift": 0.01}, 14, seed=4)
+    report = _diagnose(case, tmp_path)
+    found = {report["effect"], (report["second_effect"] or {}).get("effect")}
+    assert found == {"pitch_damping", "theta_drift"}
+    assert report["second_effect"]["closure_beyond_first"] >= 0.15
