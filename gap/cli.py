@@ -154,7 +154,7 @@ def benchmark_command(
     if out is not None:
         out.write_text(json.dumps(to_jsonable(result), indent=1))
         result["written"] = str(out)
-    emit(result if as_json else result, as_json, render_benchmark)
+    emit(result, as_json, render_benchmark)
 
 
 def render_benchmark(result: dict) -> str:
