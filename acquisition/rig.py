@@ -14,6 +14,7 @@ import math
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from ornitail.acquisition.flapping_motor_driver import FlappingMotorDriver
 from ornitail.acquisition.instrument_errors import InstrumentError
@@ -244,6 +245,26 @@ class Rig:
                 limits.flapping_frequency_min_hz,
                 limits.flapping_frequency_max_hz,
             ),
+        }
+
+    def recording_description(self) -> dict[str, Any]:
+        """What a recording stores about this rig (JSON-serialisable): name, file, simulated, time scale,
+        balance route and tool transform (mm, deg)."""
+        description = self.description
+        return {
+            "name": description.name,
+            "file": str(description.path),
+            "simulated": description.simulated,
+            "time_scale": description.time_scale,
+            "balance_route": description.balance_route,
+            "tool_transform_mm_deg": list(description.tool_transform.as_mm_deg()),
+        }
+
+    def calibration_files(self) -> dict[str, Path]:
+        """The calibration files a recording names and hashes: the balance matrix and the tunnel table."""
+        return {
+            "balance": self.description.calibration_path,
+            "tunnel_table": self.description.tunnel_table_path,
         }
 
     def now_s(self) -> float:

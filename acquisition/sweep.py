@@ -323,24 +323,12 @@ def _run_tail_state(
         plan_name=plan.name,
         resumed_from_run_id=previous_run_id,
     )
-    rig_description = {
-        "name": rig.description.name,
-        "file": str(rig.description.path),
-        "simulated": rig.description.simulated,
-        "time_scale": rig.description.time_scale,
-        "balance_route": rig.description.balance_route,
-        "tool_transform_mm_deg": list(rig.description.tool_transform.as_mm_deg()),
-    }
-    calibration_files = {
-        "balance": rig.description.calibration_path,
-        "tunnel_table": rig.description.tunnel_table_path,
-    }
     with Recorder(
         data_root,
         configuration,
         layout,
-        rig_description=rig_description,
-        calibration_files=calibration_files,
+        rig_description=rig.recording_description(),
+        calibration_files=rig.calibration_files(),
         display_decimation=None,
     ) as recorder:
         run_directories.append(recorder.run_directory)

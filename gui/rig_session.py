@@ -271,18 +271,8 @@ class RigSession:
             self.data_root,
             RunConfiguration(tail_id.strip(), x_h_mm / 1000.0, tailed, plan_name="manual"),
             balance_stream_layout(self.live.sample_rate_hz),
-            rig_description={
-                "name": rig.description.name,
-                "file": str(rig.description.path),
-                "simulated": rig.description.simulated,
-                "time_scale": rig.description.time_scale,
-                "balance_route": rig.description.balance_route,
-                "tool_transform_mm_deg": list(rig.description.tool_transform.as_mm_deg()),
-            },
-            calibration_files={
-                "balance": rig.description.calibration_path,
-                "tunnel_table": rig.description.tunnel_table_path,
-            },
+            rig_description=rig.recording_description(),
+            calibration_files=rig.calibration_files(),
         )
         recorder.__enter__()
         self.recording = ManualRecording(recorder, tailed)
