@@ -48,20 +48,7 @@ def _diagnose(example: dict, out, *extra: str):
 
 
 def test_diagnose_json_is_one_object_with_the_documented_keys(tunnel_example, tmp_path):
-    result = CliRunner().invoke(
-        main,
-        [
-            "gap",
-            "diagnose",
-            "--model",
-            tunnel_example["model"],
-            "--data",
-            tunnel_example["data"],
-            "--out",
-            str(tmp_path / "report"),
-            "--json",
-        ],
-    )
+    result = _diagnose(tunnel_example, tmp_path / "report", "--json")
     assert result.exit_code == 0, result.output
     report = json.loads(result.stdout)
     assert report["effect"] == "strut_interference"
@@ -81,20 +68,7 @@ def test_diagnose_json_is_one_object_with_the_documented_keys(tunnel_example, tm
 
 
 def test_diagnose_text_names_the_effect(tunnel_example, tmp_path):
-    result = CliRunner().invoke(
-        main,
-        [
-            "gap",
-            "diagnose",
-            "--model",
-            tunnel_example["model"],
-            "--data",
-            tunnel_example["data"],
-            "--out",
-            str(tmp_path),
-            "--no-pictures",
-        ],
-    )
+    result = _diagnose(tunnel_example, tmp_path, "--no-pictures")
     assert result.exit_code == 0, result.output
     assert "effect: strut_interference" in result.output
     assert not (tmp_path / "ranking.png").exists()
