@@ -37,8 +37,8 @@ def diagnose_files(
     """Diagnose ``data_paths`` against the baseline file; write the report into ``out``."""
     spec = read_baseline_spec(model_path)
     for path in data_paths:
-        if not Path(path).is_file():
-            raise UserInputError(str(path), "data file not found")
+        if not Path(path).exists():
+            raise UserInputError(str(path), "data file or run directory not found")
     tunnel = [is_tunnel_table(path) for path in data_paths]
     if any(tunnel) and not all(tunnel):
         raise UserInputError("--data", "give either flight logs or tunnel tables, not both")

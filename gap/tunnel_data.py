@@ -1,5 +1,6 @@
 """Tunnel cycle-averaged tables (``cycle-averages.csv`` of ``ornitail process``,
-docs/processed-tables.md) as the gap diagnosis reads them.
+docs/processed-tables.md) as the gap diagnosis reads them; recorded run directories (docs/recordings.md) are
+cycle-averaged here first, all together, exactly as ``ornitail process`` does.
 
 Only tailed rows are used: their loads are about the tailed vehicle's CG, the point the simulator
 reports its aerodynamic loads about. Columns used: ``tail_id``, ``x_h_mm``, ``tailed``,
@@ -15,6 +16,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ornitail.acquisition.recording_layout import RUN_METADATA_FILE_NAME
+from ornitail.balance.sweep_table import cycle_averaged_table
 from ornitail.core.errors import UserInputError
 
 LOAD_COLUMNS = ("x_n", "z_n", "m_n_m")
@@ -24,8 +27,11 @@ MINIMUM_POINTS = 6
 
 
 def is_tunnel_table(path: str | Path) -> bool:
-    """True for a CSV whose header holds the cycle-average table's load and set-point columns."""
+    """True for a recorded run directory, or a CSV whose header holds the cycle-average table's load and
+    set-point columns."""
     path = Path(path)
+    if is_run_directory(path):
+        return True
     if path.suffix.lower() != ".csv":
         return False
     try:
@@ -41,11 +47,26 @@ def _as_bool(value: object) -> bool:
     return str(value).strip().lower() in ("true", "1", "yes")
 
 
+def is_run_directory(path: Path) -> bool:
+    """True for a recording's run directory (it holds ``run.json``)."""
+    return path.is_dir() and (path / RUN_METADATA_FILE_NAME).is_file()
+
+
+def _tables(paths: list[Path]) -> list[tuple[str, pd.DataFrame]]:
+    """(label, cycle-average table) per CSV, and one for all run directories together (a tailless run's tares
+    and a tailed run's points may sit in different runs of one sweep)."""
+    runs = [path for path in paths if is_run_directory(Path(path))]
+    tables = [(str(path), pd.read_csv(path)) for path in paths if not is_run_directory(Path(path))]
+    if runs:
+        tables.append((", ".join(str(run) for run in runs), cycle_averaged_table(runs)))
+    return tables
+
+
 def read_tunnel_points(paths: list[Path]) -> pd.DataFrame:
-    """Tailed set points of every table, checked: finite numbers, known ranges, enough points."""
+    """Tailed set points of every table or run directory, checked: finite numbers, known ranges, enough
+    points."""
     frames = []
-    for path in paths:
-        table = pd.read_csv(path)
+    for path, table in _tables(paths):
         missing = [column for column in REQUIRED_COLUMNS if column not in table.columns]
         if missing:
             raise UserInputError(
