@@ -20,14 +20,18 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy.stats import linregress
 
 from ornitail.core.errors import UserInputError
-from ornitail.design.geometry import study_tails
+from ornitail.gap.configuration_regression import (
+    channel_shares,
+    configuration_regressions,
+    geometry_variables,
+    localisation_sentences,
+)
 from ornitail.gap.flight_data import split_runs
+from ornitail.gap.linear_candidates import fit_linear_candidates, rank_linear_candidates
 from ornitail.gap.model_spec import BaselineSpec
 from ornitail.gap.plots import tunnel_residual_picture
-from ornitail.gap.ranking import CandidateEvidence, rank_candidates
 from ornitail.gap.report import assemble_report
 from ornitail.gap.sparse_regression import sparse_terms
 from ornitail.gap.tunnel_data import LOAD_COLUMNS, LOAD_UNITS, read_tunnel_points
@@ -71,78 +75,29 @@ def predict_loads(points: pd.DataFrame, effects: EffectSet) -> np.ndarray:
 
 
 def _configuration_table(points: pd.DataFrame) -> pd.DataFrame:
-    tails = study_tails()
-    geometry = {name: tails[name].geometry for name in points["tail_id"].unique()}
-    return pd.DataFrame(
-        {
-            "S": [geometry[t].area_m2 for t in points["tail_id"]],
-            "AR": [geometry[t].aspect_ratio for t in points["tail_id"]],
-            "b": [geometry[t].span_m for t in points["tail_id"]],
-            "x_h": points["x_h_mm"].to_numpy() / 1000.0,
-            "V": points["v_m_s"].to_numpy(),
-            "theta": points["theta_rad"].to_numpy(),
-            "f": points["f_hz"].to_numpy(),
-        }
+    variables = geometry_variables(list(points["tail_id"]), points["x_h_mm"].to_numpy() / 1000.0)
+    return variables.assign(
+        V=points["v_m_s"].to_numpy(),
+        theta=points["theta_rad"].to_numpy(),
+        f=points["f_hz"].to_numpy(),
     )
 
 
 def _where(points: pd.DataFrame, residual: np.ndarray, scales: np.ndarray) -> dict[str, object]:
     normalised = residual / scales
-    energy = np.sum(normalised**2, axis=0)
-    by_channel = {
-        load: {
-            "rms": float(np.sqrt(np.mean(residual[:, i] ** 2))),
-            "unit": LOAD_UNITS[i],
-            "rms_normalised": float(np.sqrt(np.mean(normalised[:, i] ** 2))),
-            "energy_share": float(energy[i] / energy.sum()),
-        }
-        for i, load in enumerate(LOAD_COLUMNS)
-    }
-    variables = _configuration_table(points)
-    by_configuration: dict[str, object] = {}
-    for name in CONFIGURATION_VARIABLES:
-        values = variables[name].to_numpy(float)
-        if not np.all(np.isfinite(values)) or np.ptp(values) <= 1e-12 or len(values) < 3:
-            by_configuration[name] = {"varies": False}
-            continue
-        per_load = {}
-        for i, load in enumerate(LOAD_COLUMNS):
-            fit = linregress(values, normalised[:, i])
-            per_load[load] = {
-                "slope_per_unit": float(fit.slope),
-                "correlation": float(fit.rvalue),
-                "p_value": float(fit.pvalue),
-            }
-        by_configuration[name] = {"varies": True, "per_load": per_load}
+    energy = np.sum(normalised**2)
+    by_channel = channel_shares(residual, scales, LOAD_COLUMNS, LOAD_UNITS)
+    by_configuration = configuration_regressions(
+        _configuration_table(points)[list(CONFIGURATION_VARIABLES)], normalised, LOAD_COLUMNS
+    )
     sweeps = {}
     for sweep, rows in points.groupby("sweep"):
         mask = points.index.isin(rows.index)
         sweeps[str(sweep) or "all"] = {
-            "energy_share": float(np.sum(normalised[mask] ** 2) / energy.sum()),
+            "energy_share": float(np.sum(normalised[mask] ** 2) / energy),
             "points": int(mask.sum()),
         }
-    strongest = max(
-        (
-            (abs(item["per_load"][load]["correlation"]), name, load)
-            for name, item in by_configuration.items()
-            if item["varies"]
-            for load in LOAD_COLUMNS
-        ),
-        default=None,
-    )
-    channel = max(by_channel, key=lambda load: by_channel[load]["energy_share"])
-    summary = [
-        f"channel: {channel} carries {100 * by_channel[channel]['energy_share']:.0f} % of the "
-        f"normalised residual energy (RMS {by_channel[channel]['rms']:.3g} "
-        f"{by_channel[channel]['unit']})",
-    ]
-    if strongest is not None:
-        correlation, name, load = strongest
-        summary.append(
-            f"configuration: the {load} residual follows {name} most closely "
-            f"(correlation {by_configuration[name]['per_load'][load]['correlation']:+.2f}, "
-            f"p = {by_configuration[name]['per_load'][load]['p_value']:.2g})"
-        )
+    summary = localisation_sentences(by_channel, by_configuration)
     summary.append(
         "by sweep: "
         + ", ".join(f"{name} {100 * item['energy_share']:.0f} %" for name, item in sweeps.items())
@@ -187,47 +142,23 @@ def diagnose_tunnel(spec: BaselineSpec, paths: Sequence[Path], seed: int) -> Tun
     training, withheld = split_runs(len(points), seed)
     scales = measured[training].std(axis=0)
     scales = np.where(scales > 0, scales, 1.0)
-    directions = {}
-    for name in spec.effects_off:
-        if EFFECT_SCOPES[name] == "flight":
-            continue
-        step = predict_loads(points, effects.with_enabled(name)) - baseline
-        if np.max(np.abs(step / scales)) > 1e-9:
-            directions[name] = step
-    evidence, afters = [], {}
-    for name, step in directions.items():
-        x = (step[training] / scales).ravel()
-        y = (residual[training] / scales).ravel()
-        k = float(x @ y / (x @ x))
-        afters[name] = (residual - k * step, k, "x effect", 1)
-    y_train = residual[training] / scales
-    shift = y_train.mean(axis=0) * scales
-    afters["load_offset"] = (residual - shift, float(np.linalg.norm(shift)), "N (norm)", 3)
+    steps = {
+        name: predict_loads(points, effects.with_enabled(name)) - baseline
+        for name in spec.effects_off
+        if EFFECT_SCOPES[name] != "flight"
+    }
+    folds = [(training, withheld)]
+    fits = fit_linear_candidates(residual, steps, scales, folds, ("load_offset", "N (norm)"))
     if spec.candidates:
-        afters = {name: item for name, item in afters.items() if name in spec.candidates}
-    base_sse = np.sum((residual / scales) ** 2, axis=1)
-    for name, (after, magnitude, unit, parameters) in afters.items():
-        sse = np.sum((after / scales) ** 2, axis=1)
-        evidence.append(
-            CandidateEvidence(
-                name, magnitude, unit, parameters, sse[withheld], float(sse[training].sum()), 0.0
-            )
-        )
-    ranking = rank_candidates(
-        evidence,
-        base_sse[withheld],
-        float(base_sse[training].sum()),
-        0.0,
-        len(training) * 3,
-        seed,
-    )
-    after = afters[ranking.entries[0].name][0]
+        fits = {name: fit for name, fit in fits.items() if name in spec.candidates}
+    scored = rank_linear_candidates(residual, fits, scales, folds, seed)
+    after = scored.best.after
     report = assemble_report(
         kind="tunnel",
         spec=spec,
         data_paths=paths,
         run_counts={"total": len(points), "training": len(training), "withheld": len(withheld)},
-        ranking=ranking,
+        ranking=scored.ranking,
         channels=LOAD_COLUMNS,
         sample_counts=np.ones(len(withheld)),
         before_sse=(residual[withheld] / scales) ** 2,
