@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
 import click
+
+from ornitail.core.errors import UserInputError
 
 
 @click.command("gui")
@@ -27,6 +30,14 @@ import click
 )
 def gui_command(data_root: Path | None, rig_file: Path | None, time_scale: float | None) -> None:
     """Open the desktop window: live view, cycle view, controls, sweeps, runs and design."""
+    if sys.platform.startswith("linux") and not any(
+        os.environ.get(name) for name in ("DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM")
+    ):
+        raise UserInputError(
+            "display",
+            "no screen to open the window on: DISPLAY and WAYLAND_DISPLAY are unset "
+            "(run it on the desktop, under xvfb-run, or with QT_QPA_PLATFORM=offscreen)",
+        )
     try:
         from PySide6 import QtWidgets
 
