@@ -73,21 +73,28 @@ def balance_stream_layout(sample_rate_hz: float) -> StreamLayout:
 
 
 class _Measurement:
-    """Sums of the next ``rows`` rows the pump sees."""
+    """Sums of ``rows`` rows, from the first the board took at or after ``first_counter`` (None: the next one
+    to arrive)."""
 
-    def __init__(self, rows: int, recorder: Recorder | None) -> None:
+    def __init__(self, rows: int, recorder: Recorder | None, first_counter: int | None) -> None:
         self.rows_wanted = rows
         self.recorder = recorder
+        self.first_counter = first_counter
         self.sums = np.zeros(len(CHANNEL_NAMES))
         self.rows = 0
         self.first_row_index: int | None = None
         self.done = threading.Event()
 
-    def add(self, volts: np.ndarray, first_row_index: int | None) -> None:
-        take = min(len(volts), self.rows_wanted - self.rows)
+    def add(self, counters: np.ndarray, volts: np.ndarray, first_row_index: int | None) -> None:
+        start = 0
         if self.rows == 0:
-            self.first_row_index = first_row_index
-        self.sums += volts[:take].sum(axis=0)
+            if self.first_counter is not None:
+                start = int(np.searchsorted(counters, self.first_counter))
+                if start == len(counters):
+                    return  # sampled before the measurement was asked for (still in transit then)
+            self.first_row_index = None if first_row_index is None else first_row_index + start
+        take = min(len(volts) - start, self.rows_wanted - self.rows)
+        self.sums += volts[start : start + take].sum(axis=0)
         self.rows += take
         if self.rows >= self.rows_wanted:
             self.done.set()
@@ -193,7 +200,7 @@ class LiveBalance:
             else:
                 first_row = None
         if measurement is not None and (measurement.recorder is None or first_row is not None):
-            measurement.add(volts, first_row)
+            measurement.add(counters, volts, first_row)
         self.display_feed.offer(counters, volts, self._rows_seen)
         self._rows_seen += len(counters)
 
@@ -266,7 +273,8 @@ class LiveBalance:
         return last_counter - first_counter + 1 - row_count
 
     def measure(self, record_s: float, timeout_s: float) -> MeasuredRows:
-        """Average the next ``record_s`` of full-rate rows; blocks until they arrived (wall ``timeout_s``).
+        """Average the ``record_s`` of full-rate rows the board takes from now on (chosen by sample counter, as a
+        sweep's set point is); blocks until they arrived (wall ``timeout_s``).
 
         While a recorder is attached, only rows it accepted count and their row indices are returned, so the
         caller can journal them as a set point.
@@ -275,7 +283,12 @@ class LiveBalance:
             raise RuntimeError("the balance is not streaming: start() first")
         rows = max(1, int(round(record_s * self.sample_rate_hz)))
         with self._lock:
-            measurement = _Measurement(rows, self._recorder)
+            first_counter = (
+                None
+                if self._first_counter is None
+                else self._first_counter + self.rig.balance_samples_since_start()
+            )
+            measurement = _Measurement(rows, self._recorder, first_counter)
             self._measurement = measurement
         try:
             if not measurement.done.wait(timeout_s):
