@@ -32,7 +32,10 @@ gap_group = click.Group("gap", help="Sim-to-real gap: where it lies, which effec
     type=click.Path(path_type=Path),
     multiple=True,
     required=True,
-    help="Flight log (CSV/Parquet/.mat) or tunnel cycle-averages.csv; repeat.",
+    help=(
+        "Flight log (CSV/Parquet/.mat), tunnel cycle-averages.csv (repeat either), or one "
+        "steady-state table (representative_models.csv or tail, x_h_mm, theta_ss_deg, v_ss_m_s)."
+    ),
 )
 @click.option("--seed", type=int, default=2018, show_default=True, help="Split and bootstrap seed.")
 @click.option(
@@ -73,10 +76,10 @@ def _parse_effect(text: str) -> tuple[str, float | None]:
 @gap_group.command("example")
 @click.option(
     "--kind",
-    type=click.Choice(["flight", "tunnel"]),
+    type=click.Choice(["flight", "tunnel", "steady"]),
     default="flight",
     show_default=True,
-    help="Free-flight log or tunnel sweep table.",
+    help="Free-flight log, tunnel sweep table or steady-state table.",
 )
 @click.option(
     "--effect",

@@ -6,6 +6,9 @@ layout of ``cycle-averages.csv`` (docs/processed-tables.md, tailed rows) at x_h 
 126 mm (pitch 0-40 deg at 0.8 m/s and 13.5 Hz; velocity 0.4-1.2 m/s and frequency 11-15 Hz at
 25 deg), loads from :func:`ornitail.sim.tunnel.true_cycle_average` with the withheld effects on,
 plus Gaussian scatter of :data:`TUNNEL_NOISE` (standard error of a cycle average with its tare).
+Steady: a table of steady states (``tail, x_h_mm, theta_ss_deg, v_ss_m_s, f_ss_hz`` and their
+``*_sigma``) at :data:`STEADY_CONFIGURATIONS`, the simulator's free-flight trims with the withheld
+effects on plus Gaussian scatter of :data:`ornitail.gap.steady_data.DEFAULT_SIGMA`.
 """
 
 from __future__ import annotations
@@ -18,6 +21,8 @@ import pandas as pd
 
 from ornitail.core.errors import UserInputError
 from ornitail.gap.model_spec import BaselineSpec, write_baseline_spec
+from ornitail.gap.steady_data import DEFAULT_SIGMA
+from ornitail.gap.steady_diagnosis import predict_trims
 from ornitail.gap.tunnel_diagnosis import predict_loads
 from ornitail.gap.withheld_effects import WithheldCase, check_effects, simulate_withheld_log
 from ornitail.sim.effects import EffectSet
@@ -35,6 +40,11 @@ DEFAULT_MAGNITUDES = {
     "theta_drift": 0.008,
 }
 SWEEP_X_H_MM = (57.0, 98.0, 126.0)
+STEADY_SWITCHED = ("wake_profile", "cg_shift_with_x_h", "day_to_day_drift")
+STEADY_TAILS = ("S1", "S2", "S3", "S4", "S5", "S6", "AR1", "AR2", "AR4", "AR5", "AR6")
+STEADY_CONFIGURATIONS = tuple((tail, 98.0) for tail in STEADY_TAILS) + tuple(
+    (tail, x_h_mm) for x_h_mm in (57.0, 126.0) for tail in ("S1", "S3", "S6", "AR1", "AR6")
+)
 
 
 def tunnel_sweep_points(tail: str) -> pd.DataFrame:
@@ -57,13 +67,7 @@ def write_tunnel_example(
     effects: dict[str, float], tail: str, seed: int, folder: Path
 ) -> tuple[Path, Path]:
     """A sweep table with ``effects`` (tunnel-scope simulator effects, on/off) and its baseline."""
-    unknown = [name for name in effects if name not in TUNNEL_SWITCHED]
-    if unknown:
-        raise UserInputError(
-            "--effect",
-            f"{unknown[0]!r} is not a tunnel example effect; choose from "
-            f"{', '.join(TUNNEL_SWITCHED)}",
-        )
+    _check_names(effects, TUNNEL_SWITCHED, "tunnel")
     table = tunnel_sweep_points(tail)
     points = table.assign(theta_rad=np.radians(table["theta_deg"]), f_hz=table["f_set_hz"])
     truth = EffectSet().without(*TUNNEL_SWITCHED).with_enabled(*effects)
@@ -75,6 +79,33 @@ def write_tunnel_example(
     data = folder / "cycle-averages.csv"
     table.to_csv(data, index=False, float_format="%.9g")
     spec = BaselineSpec("simulator", tail, 98.0, effects_off=TUNNEL_SWITCHED)
+    return data, write_baseline_spec(spec, folder / "baseline.toml")
+
+
+def _check_names(effects: dict[str, float], allowed: tuple[str, ...], kind: str) -> None:
+    unknown = [name for name in effects if name not in allowed]
+    if unknown:
+        raise UserInputError(
+            "--effect",
+            f"{unknown[0]!r} is not a {kind} example effect; choose from {', '.join(allowed)}",
+        )
+
+
+def write_steady_example(effects: dict[str, float], seed: int, folder: Path) -> tuple[Path, Path]:
+    """A steady-state table with ``effects`` (on/off) and the baseline that switches them off."""
+    _check_names(effects, STEADY_SWITCHED, "steady")
+    table = pd.DataFrame(STEADY_CONFIGURATIONS, columns=["tail", "x_h_mm"])
+    rows = table.assign(label=table["tail"], x_h_m=table["x_h_mm"] / 1000.0)
+    truth = EffectSet().without(*STEADY_SWITCHED).with_enabled(*effects)
+    values = predict_trims(rows, truth)
+    values += np.random.default_rng(seed).standard_normal(values.shape) * DEFAULT_SIGMA
+    for index, column in enumerate(("theta_ss_deg", "v_ss_m_s", "f_ss_hz")):
+        scale = 180.0 / math.pi if column.endswith("_deg") else 1.0
+        table[column] = values[:, index] * scale
+        table[f"{column}_sigma"] = DEFAULT_SIGMA[index] * scale
+    data = folder / "steady-states.csv"
+    table.to_csv(data, index=False, float_format="%.6g")
+    spec = BaselineSpec("simulator", "S3", 98.0, effects_off=STEADY_SWITCHED)
     return data, write_baseline_spec(spec, folder / "baseline.toml")
 
 
@@ -96,9 +127,12 @@ def write_example(
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as error:
         raise UserInputError(f"--out {folder}", f"cannot create the folder: {error}") from None
-    if kind == "tunnel":
-        data, model = write_tunnel_example({name: 1.0 for name in effects}, tail, seed, folder)
+    if kind in ("tunnel", "steady"):
         magnitudes = {name: 1.0 for name in effects}
+        if kind == "tunnel":
+            data, model = write_tunnel_example(magnitudes, tail, seed, folder)
+        else:
+            data, model = write_steady_example(magnitudes, seed, folder)
     else:
         magnitudes = {
             name: DEFAULT_MAGNITUDES.get(name, 1.0) if value is None else value

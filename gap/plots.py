@@ -124,3 +124,29 @@ def tunnel_residual_picture(
     figure.colorbar(dots, ax=axes[-1], label="x_h (mm)")
     figure.tight_layout()
     return _save(figure, folder, "residuals_by_point")
+
+
+def steady_residual_picture(
+    labels: Sequence[str],
+    channels: Sequence[str],
+    before: np.ndarray,
+    after: np.ndarray,
+    effect: str,
+    folder: Path,
+) -> list[str]:
+    """Steady-state residual per configuration in units of its standard error, baseline (dots)
+    and with ``effect`` (crosses; withheld predictions), one panel per channel."""
+    figure, axes = plt.subplots(
+        len(channels), 1, figsize=(max(6.0, 0.35 * len(labels) + 2), 2.2 * len(channels))
+    )
+    positions = np.arange(len(labels))
+    for index, (axis, channel) in enumerate(zip(np.atleast_1d(axes), channels, strict=True)):
+        axis.plot(positions, before[:, index], "o", markersize=4, label="baseline")
+        axis.plot(positions, after[:, index], "x", markersize=6, label=f"+ {effect}")
+        axis.axhline(0.0, color="black", linewidth=0.6)
+        axis.set_ylabel(f"{channel} / sigma")
+        axis.set_xticks(positions, labels if index == len(channels) - 1 else [], rotation=60)
+    np.atleast_1d(axes)[0].legend(fontsize=7)
+    np.atleast_1d(axes)[-1].tick_params(axis="x", labelsize=7)
+    figure.tight_layout()
+    return _save(figure, folder, "residuals_by_configuration")

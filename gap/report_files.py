@@ -13,6 +13,8 @@ from ornitail.gap.flight_diagnosis import FlightDiagnosis, diagnose_flight, resi
 from ornitail.gap.model_spec import read_baseline_spec
 from ornitail.gap.plots import localisation_picture, ranking_picture, residual_spectra_picture
 from ornitail.gap.report_text import render_report
+from ornitail.gap.steady_data import is_steady_table
+from ornitail.gap.steady_diagnosis import diagnose_steady
 from ornitail.gap.tunnel_data import is_tunnel_table
 from ornitail.gap.tunnel_diagnosis import diagnose_tunnel
 
@@ -40,6 +42,11 @@ def diagnose_files(
         if not Path(path).exists():
             raise UserInputError(str(path), "data file or run directory not found")
     tunnel = [is_tunnel_table(path) for path in data_paths]
+    steady = [is_steady_table(path) for path in data_paths]
+    if any(steady) and len(data_paths) > 1:
+        raise UserInputError(
+            "--data", "give one steady-state table alone (one row per configuration)"
+        )
     if any(tunnel) and not all(tunnel):
         raise UserInputError("--data", "give either flight logs or tunnel tables, not both")
     try:
@@ -47,7 +54,12 @@ def diagnose_files(
     except OSError as error:
         raise UserInputError(f"--out {out}", f"cannot create the folder: {error}") from None
     written: list[str] = []
-    if all(tunnel):
+    if any(steady):
+        diagnosis = diagnose_steady(spec, data_paths[0], seed)
+        report = diagnosis.report
+        if pictures:
+            written += diagnosis.pictures(out)
+    elif all(tunnel):
         diagnosis = diagnose_tunnel(spec, data_paths, seed)
         report = diagnosis.report
         if pictures:

@@ -21,6 +21,8 @@ def render_report(report: dict[str, Any]) -> str:
         f"gap diagnosis of {report['data_kind']} data ({runs['total']} runs: "
         f"{runs['training']} to fit, {runs['withheld']} withheld to score; seed {report['seed']})",
     ]
+    if report.get("split"):
+        lines.append(f"split: {report['split']}")
     if report["verdict"] == "effect":
         magnitude = report["magnitude"]
         lines.append(
