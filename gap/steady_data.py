@@ -76,7 +76,8 @@ def _numbers(path: Path, table: pd.DataFrame, column: str) -> np.ndarray:
     if bad.size:
         raise UserInputError(
             f"{path}: column {column}",
-            f"value {table[column].iloc[bad[0]]!r} in data row {bad[0] + 1} is not a finite number",
+            f"value {str(table[column].iloc[bad[0]])!r} in data row {bad[0] + 1} "
+            "is not a finite number",
         )
     return values
 
