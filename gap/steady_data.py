@@ -23,6 +23,7 @@ import pandas as pd
 
 from ornitail.core.errors import UserInputError
 from ornitail.design.geometry import study_tails
+from ornitail.gap.table_checks import finite_column
 
 CHANNELS = ("theta_ss", "v_ss", "f_ss")
 CHANNEL_UNITS = ("rad", "m/s", "Hz")
@@ -70,18 +71,6 @@ def is_steady_table(path: str | Path) -> bool:
     return _layout_of(set(header)) is not None
 
 
-def _numbers(path: Path, table: pd.DataFrame, column: str) -> np.ndarray:
-    values = pd.to_numeric(table[column], errors="coerce").to_numpy(float)
-    bad = np.flatnonzero(~np.isfinite(values))
-    if bad.size:
-        raise UserInputError(
-            f"{path}: column {column}",
-            f"value {str(table[column].iloc[bad[0]])!r} in data row {bad[0] + 1} "
-            "is not a finite number",
-        )
-    return values
-
-
 def _within(path: Path, column: str, values: np.ndarray, low: float, high: float) -> None:
     bad = np.flatnonzero((values <= low) | (values >= high))
     if bad.size:
@@ -126,7 +115,7 @@ def read_steady_table(path: Path) -> pd.DataFrame:
             str(path),
             f"{len(table)} configuration(s); the diagnosis needs at least {MINIMUM_CONFIGURATIONS}",
         )
-    x_h_m = _numbers(path, table, layout.x_h) * layout.x_h_to_m
+    x_h_m = finite_column(path, table, layout.x_h) * layout.x_h_to_m
     _within(
         path, layout.x_h, x_h_m / layout.x_h_to_m, 0.02 / layout.x_h_to_m, 0.3 / layout.x_h_to_m
     )
@@ -141,11 +130,11 @@ def read_steady_table(path: Path) -> pd.DataFrame:
     for index, (channel, column) in enumerate(zip(CHANNELS, layout.values, strict=True)):
         if column not in table.columns or table[column].isna().all():
             continue
-        values = _numbers(path, table, column)
+        values = finite_column(path, table, column)
         _within(path, column, values, *limits[index])
         sigma = np.full(len(table), DEFAULT_SIGMA[index])
         if f"{column}_sigma" in table.columns:
-            sigma = _numbers(path, table, f"{column}_sigma") * layout.to_si[index]
+            sigma = finite_column(path, table, f"{column}_sigma") * layout.to_si[index]
             _within(path, f"{column}_sigma", sigma / layout.to_si[index], 0.0, math.inf)
         rows[channel] = values * layout.to_si[index]
         rows[f"{channel}_sigma"] = sigma

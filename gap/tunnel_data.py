@@ -19,6 +19,7 @@ import pandas as pd
 from ornitail.acquisition.recording_layout import RUN_METADATA_FILE_NAME
 from ornitail.balance.sweep_table import cycle_averaged_table
 from ornitail.core.errors import UserInputError
+from ornitail.gap.table_checks import finite_column
 
 LOAD_COLUMNS = ("x_n", "z_n", "m_n_m")
 LOAD_UNITS = ("N", "N", "N m")
@@ -76,15 +77,7 @@ def read_tunnel_points(paths: list[Path]) -> pd.DataFrame:
         table = table[table["tailed"].map(_as_bool)].copy()
         frequency = "f_hall_hz" if "f_hall_hz" in table.columns else "f_set_hz"
         for column in ("x_h_mm", "theta_deg", "v_m_s", frequency, *LOAD_COLUMNS):
-            values = pd.to_numeric(table[column], errors="coerce").to_numpy(float)
-            bad = np.flatnonzero(~np.isfinite(values))
-            if bad.size:
-                raise UserInputError(
-                    f"{path}: column {column}",
-                    f"value {table[column].iloc[bad[0]]!r} in data row {table.index[bad[0]] + 1} "
-                    "is not a finite number",
-                )
-            table[column] = values
+            table[column] = finite_column(path, table, column)
         if ((table["v_m_s"] <= 0) | (table[frequency] <= 0)).any():
             raise UserInputError(
                 str(path), "tailed rows need wind on and motor on (v_m_s > 0, frequency > 0)"

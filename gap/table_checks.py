@@ -1,0 +1,24 @@
+"""Checks of the numeric columns of a table a user gives (tunnel or steady-state table)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ornitail.core.errors import UserInputError
+
+
+def finite_column(path: str | Path, table: pd.DataFrame, column: str) -> np.ndarray:
+    """``table[column]`` as floats; a cell that is not a finite number stops with one line naming
+    the file, the column, the cell as written and its data row (1-based, header not counted)."""
+    values = pd.to_numeric(table[column], errors="coerce").to_numpy(float)
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        raise UserInputError(
+            f"{path}: column {column}",
+            f"value {str(table[column].iloc[bad[0]])!r} in data row {table.index[bad[0]] + 1} "
+            "is not a finite number",
+        )
+    return values
