@@ -23,7 +23,7 @@ import pandas as pd
 
 from ornitail.core.errors import UserInputError
 from ornitail.design.geometry import study_tails
-from ornitail.gap.table_checks import finite_column
+from ornitail.gap.table_checks import csv_header, finite_column
 
 CHANNELS = ("theta_ss", "v_ss", "f_ss")
 CHANNEL_UNITS = ("rad", "m/s", "Hz")
@@ -61,14 +61,7 @@ def _layout_of(header: set[str]) -> Layout | None:
 
 def is_steady_table(path: str | Path) -> bool:
     """True for a CSV whose header holds a steady-state layout's tail, x_h, theta and V columns."""
-    path = Path(path)
-    if path.suffix.lower() != ".csv":
-        return False
-    try:
-        header = pd.read_csv(path, nrows=0).columns
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, OSError):
-        return False
-    return _layout_of(set(header)) is not None
+    return _layout_of(csv_header(path)) is not None
 
 
 def _within(path: Path, column: str, values: np.ndarray, low: float, high: float) -> None:

@@ -10,6 +10,17 @@ import pandas as pd
 from ornitail.core.errors import UserInputError
 
 
+def csv_header(path: str | Path) -> set[str]:
+    """Column names of a readable ``.csv`` file; empty for anything else (wrong suffix, unreadable)."""
+    path = Path(path)
+    if path.suffix.lower() != ".csv" or not path.is_file():
+        return set()
+    try:
+        return set(pd.read_csv(path, nrows=0).columns)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, OSError):
+        return set()
+
+
 def finite_column(path: str | Path, table: pd.DataFrame, column: str) -> np.ndarray:
     """``table[column]`` as floats; a cell that is not a finite number stops with one line naming
     the file, the column, the cell as written and its data row (1-based, header not counted)."""

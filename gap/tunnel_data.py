@@ -19,7 +19,7 @@ import pandas as pd
 from ornitail.acquisition.recording_layout import RUN_METADATA_FILE_NAME
 from ornitail.balance.sweep_table import cycle_averaged_table
 from ornitail.core.errors import UserInputError
-from ornitail.gap.table_checks import finite_column
+from ornitail.gap.table_checks import csv_header, finite_column
 
 LOAD_COLUMNS = ("x_n", "z_n", "m_n_m")
 LOAD_UNITS = ("N", "N", "N m")
@@ -33,13 +33,7 @@ def is_tunnel_table(path: str | Path) -> bool:
     path = Path(path)
     if is_run_directory(path):
         return True
-    if path.suffix.lower() != ".csv":
-        return False
-    try:
-        header = pd.read_csv(path, nrows=0).columns
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, OSError):
-        return False
-    return {"x_n", "m_n_m", "theta_deg", "tail_id"} <= set(header)
+    return {"x_n", "m_n_m", "theta_deg", "tail_id"} <= csv_header(path)
 
 
 def _as_bool(value: object) -> bool:
