@@ -433,7 +433,11 @@ def run_sweep(
         result.status, result.message = "failed", str(error)
     finally:
         if balance_stream is None:
-            stream.stop()
+            try:
+                stream.stop()
+            except InstrumentError as error:  # a balance that failed mid-run is already the run's reason
+                if result.status == "completed":
+                    result.status, result.message = "failed", str(error)
         rig.safe_state()
         result.completed_points = context.completed
     if result.status == "completed":

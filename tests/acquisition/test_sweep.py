@@ -198,3 +198,25 @@ def test_a_record_that_loses_samples_is_taken_again_and_the_kept_one_is_whole(
         assert not inside.any()
     measurements = [point for point in plan.set_points if point.kind == "measurement"]
     assert len(cycle_averaged_table(result.run_directories)) == len(measurements)
+
+
+def test_unplugged_balance_fails_the_run_naming_it_and_keeps_what_was_recorded(
+    simulated_rig, tmp_path
+):
+    plan = short_plan()
+
+    def on_event(event):
+        if event.stage == "recorded" and event.completed == 2:
+            threading.Timer(0.05, simulated_rig.simulators.daq_board.unplug).start()
+
+    result = run_sweep(plan, simulated_rig, tmp_path, on_event=on_event)
+    assert result.status == "failed"
+    assert simulated_rig.balance.name in result.message and "failed" in result.message
+    recording = load_recording(result.run_directories[0])
+    assert recording.status == "failed"
+    assert len(recording.set_points_frame()) == 2
+    assert recording.sample_count >= 2 * 6000
+    assert motor_spins_down(simulated_rig)
+    simulated_rig.close(
+        raise_errors=False
+    )  # the balance is gone; the fixture's close would report it again
