@@ -10,24 +10,8 @@ from ornitail.core.cli import main
 
 
 @pytest.fixture(scope="module")
-def tunnel_example(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("tunnel")
-    result = CliRunner().invoke(
-        main,
-        [
-            "gap",
-            "example",
-            "--kind",
-            "tunnel",
-            "--effect",
-            "strut_interference",
-            "--out",
-            str(folder),
-            "--json",
-        ],
-    )
-    assert result.exit_code == 0, result.output
-    return json.loads(result.output)
+def tunnel_example(write_gap_example):
+    return write_gap_example("tunnel", "strut_interference")
 
 
 def _diagnose(example: dict, out, *extra: str):

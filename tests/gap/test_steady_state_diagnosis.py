@@ -76,24 +76,8 @@ def test_campaign_table_layout_reads_like_the_plain_one(tmp_path):
 
 
 @pytest.fixture(scope="module")
-def steady_example(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("steady")
-    result = CliRunner().invoke(
-        main,
-        [
-            "gap",
-            "example",
-            "--kind",
-            "steady",
-            "--effect",
-            "cg_shift_with_x_h",
-            "--out",
-            str(folder),
-            "--json",
-        ],
-    )
-    assert result.exit_code == 0, result.output
-    return json.loads(result.output)
+def steady_example(write_gap_example):
+    return write_gap_example("steady", "cg_shift_with_x_h")
 
 
 def _diagnose(model: str, data, out, *extra: str):
