@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ornitail.acquisition.counter_gaps import CounterGap, find_counter_gaps
 from ornitail.acquisition.daq_protocol import ANALOG_CHANNEL_COUNT, CHANNEL_NAMES
 from ornitail.acquisition.recorder import DisplayFeed, Recorder
 from ornitail.acquisition.recording_layout import ChannelSpec, StreamLayout
@@ -28,7 +29,8 @@ from ornitail.core.errors import UserInputError
 
 GET_BLOCK_TIMEOUT_S = 0.1
 RECENT_BLOCKS_KEPT = 2000
-"""Recorded blocks whose counters are remembered (the driver delivers ~100 a second: many seconds of backlog)."""
+"""Recorded blocks whose counters are remembered to find where a set point begins (the driver delivers ~100 a
+second: many seconds of backlog). Gaps are remembered for the whole recording."""
 
 
 @dataclass(frozen=True)
@@ -142,6 +144,10 @@ class LiveBalance:
         self._clip_low_v = self._clip_high_v = np.zeros(ANALOG_CHANNEL_COUNT)
         self._first_counter: int | None = None
         self._recent_rows: deque[tuple[int, np.ndarray]] = deque(maxlen=RECENT_BLOCKS_KEPT)
+        self._recorded_gaps: list[
+            CounterGap
+        ] = []  # in the attached recorder's rows, however long ago
+        self._last_recorded_counter: int | None = None
 
     # -- stream -----------------------------------------------------------------------------
     def start(self, sample_rate_hz: float | None = None) -> None:
@@ -194,8 +200,11 @@ class LiveBalance:
         if recorder is not None:
             first_row = recorder.next_sample_index
             if recorder.put_block(counters, volts):
+                gaps = find_counter_gaps(counters, self._last_recorded_counter, first_row)
                 with self._lock:
                     self._recent_rows.append((first_row, counters))
+                    self._recorded_gaps += gaps
+                self._last_recorded_counter = int(counters[-1])
                 self._report_link_health(recorder)
             else:
                 first_row = None
@@ -221,6 +230,8 @@ class LiveBalance:
         with self._lock:
             self._reported = (statistics.crc_failures, statistics.lost_samples)
             self._recent_rows.clear()  # row indices belong to one recorder
+            self._recorded_gaps = []
+            self._last_recorded_counter = None
             self._recorder = recorder
 
     def detach(self) -> Recorder | None:
@@ -256,21 +267,12 @@ class LiveBalance:
         return None
 
     def samples_missing_in_rows(self, first_row: int, row_count: int) -> int:
-        """Samples the counters say were lost between recorded rows ``first_row`` and ``first_row + row_count - 1``."""
-        with self._lock:
-            blocks = list(self._recent_rows)
+        """Samples the counters say were lost between recorded rows ``first_row`` and ``first_row + row_count - 1``
+        (on the link, or in a block the recorder's full queue refused)."""
         last_row = first_row + row_count - 1
-        first_counter = last_counter = None
-        for block_first_row, counters in blocks:
-            if block_first_row <= first_row < block_first_row + len(counters):
-                first_counter = int(counters[first_row - block_first_row])
-            if block_first_row <= last_row < block_first_row + len(counters):
-                last_counter = int(counters[last_row - block_first_row])
-        if first_counter is None or last_counter is None:
-            raise RuntimeError(
-                f"rows {first_row}..{last_row} are no longer remembered by the balance stream"
-            )
-        return last_counter - first_counter + 1 - row_count
+        with self._lock:
+            gaps = list(self._recorded_gaps)
+        return sum(gap.missing_samples for gap in gaps if first_row < gap.row_index <= last_row)
 
     def measure(self, record_s: float, timeout_s: float) -> MeasuredRows:
         """Average the ``record_s`` of full-rate rows the board takes from now on (chosen by sample counter, as a

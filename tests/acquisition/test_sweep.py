@@ -10,6 +10,7 @@ import threading
 import numpy as np
 import pytest
 
+from ornitail.acquisition import live_balance
 from ornitail.acquisition.catalog import RunCatalog
 from ornitail.acquisition.instrument_errors import InstrumentError
 from ornitail.acquisition.recording_reader import load_recording
@@ -220,3 +221,16 @@ def test_unplugged_balance_fails_the_run_naming_it_and_keeps_what_was_recorded(
     simulated_rig.close(
         raise_errors=False
     )  # the balance is gone; the fixture's close would report it again
+
+
+def test_records_longer_than_the_remembered_blocks_are_checked_whole(
+    simulated_rig, tmp_path, monkeypatch
+):
+    """Where a point begins is found among the last few blocks, but its gaps are known for the whole record: with
+    only 5 blocks remembered (about 0.05 s), 0.6 s records still complete, whole and checked."""
+    monkeypatch.setattr(live_balance, "RECENT_BLOCKS_KEPT", 5)
+    result = run_sweep(short_plan(), simulated_rig, tmp_path)
+    assert result.status == "completed"
+    frame = load_recording(result.run_directories[0]).set_points_frame()
+    assert (frame["last_sample_index"] - frame["first_sample_index"] + 1 == 6000).all()
+    assert (frame["samples_missing_in_record"] == 0).all()
