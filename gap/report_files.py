@@ -15,7 +15,7 @@ from ornitail.gap.plots import localisation_picture, ranking_picture, residual_s
 from ornitail.gap.report_text import render_report
 from ornitail.gap.steady_data import is_steady_table
 from ornitail.gap.steady_diagnosis import diagnose_steady
-from ornitail.gap.tunnel_data import is_tunnel_table
+from ornitail.gap.tunnel_data import is_run_directory, is_tunnel_table
 from ornitail.gap.tunnel_diagnosis import diagnose_tunnel
 
 
@@ -41,6 +41,11 @@ def diagnose_files(
     for path in data_paths:
         if not Path(path).exists():
             raise UserInputError(str(path), "data file or run directory not found")
+        if Path(path).is_dir() and not is_run_directory(Path(path)):
+            raise UserInputError(
+                str(path),
+                "a folder but not a recorded run (no run.json); give each run directory with --data",
+            )
     tunnel = [is_tunnel_table(path) for path in data_paths]
     steady = [is_steady_table(path) for path in data_paths]
     if any(steady) and len(data_paths) > 1:

@@ -82,6 +82,14 @@ def test_missing_model_file_is_one_line(tunnel_example, tmp_path):
     assert "nope.toml" in message and "not found" in message
 
 
+def test_a_folder_that_is_not_a_run_is_named(tunnel_example, tmp_path):
+    folder = tmp_path / "runs"
+    folder.mkdir()
+    arguments = ["gap", "diagnose", "--model", tunnel_example["model"], "--data", str(folder)]
+    message = _one_line_error([*arguments, "--out", str(tmp_path / "report")])
+    assert str(folder) in message and "no run.json" in message
+
+
 def test_unknown_effect_in_the_model_file_is_named(tunnel_example, tmp_path):
     model = tmp_path / "model.toml"
     model.write_text(
