@@ -10,7 +10,7 @@ import threading
 import numpy as np
 import pytest
 
-from ornitail.acquisition import live_balance
+from ornitail.acquisition import live_balance, sweep
 from ornitail.acquisition.catalog import RunCatalog
 from ornitail.acquisition.instrument_errors import InstrumentError
 from ornitail.acquisition.recording_reader import load_recording
@@ -161,6 +161,28 @@ def test_unplugged_fan_fails_the_run_naming_it_and_keeps_what_was_recorded(simul
     )  # the fan is gone; the fixture's own close would report it again
 
 
+def drops_after_the_first_point_settles(rig, kind="tare"):
+    """An ``on_event`` that makes the board drop 25 samples every 0.1 s of rig time for 1.5 s once the first point
+    of ``kind`` settles, and an event set when the drops are over."""
+    board = rig.simulators.daq_board
+    dropping_over = threading.Event()
+
+    def drop_for_a_while():
+        for _ in range(15):
+            board.drop_samples(25)
+            rig.wait_simulated_s(0.1)
+        dropping_over.set()
+
+    started = threading.Event()
+
+    def on_event(event):
+        if event.stage == "settled" and event.set_point.kind == kind and not started.is_set():
+            started.set()
+            threading.Thread(target=drop_for_a_while, daemon=True).start()
+
+    return on_event, dropping_over
+
+
 def test_a_record_that_loses_samples_is_taken_again_and_the_kept_one_is_whole(
     simulated_rig, tmp_path
 ):
@@ -168,19 +190,7 @@ def test_a_record_that_loses_samples_is_taken_again_and_the_kept_one_is_whole(
     wind-off tare) settles: the first 0.6 s record is bound to contain a gap, so the point is recorded again
     until a record without one is kept (at most MAX_RETAKES = 3 times; the drops stop before the third)."""
     plan = short_plan()
-    board = simulated_rig.simulators.daq_board
-    dropping = threading.Event()
-
-    def drop_for_a_while():
-        for _ in range(15):
-            board.drop_samples(25)
-            simulated_rig.wait_simulated_s(0.1)
-        dropping.set()
-
-    def on_event(event):
-        if event.stage == "settled" and event.completed == 0:
-            threading.Thread(target=drop_for_a_while, daemon=True).start()
-
+    on_event, dropping = drops_after_the_first_point_settles(simulated_rig)
     result = run_sweep(plan, simulated_rig, tmp_path, on_event=on_event)
     assert result.status == "completed"
     assert dropping.wait(timeout=30)
@@ -234,3 +244,23 @@ def test_records_longer_than_the_remembered_blocks_are_checked_whole(
     frame = load_recording(result.run_directories[0]).set_points_frame()
     assert (frame["last_sample_index"] - frame["first_sample_index"] + 1 == 6000).all()
     assert (frame["samples_missing_in_record"] == 0).all()
+
+
+def test_a_record_kept_with_a_gap_is_journalled_and_refused_by_processing(
+    simulated_rig, tmp_path, monkeypatch
+):
+    """With no retakes allowed the first measurement keeps its gap: the journal says how many samples it lost, and
+    processing names the run and the set point instead of timing cycles across the gap."""
+    monkeypatch.setattr(sweep, "MAX_RETAKES", 0)
+    on_event, dropping = drops_after_the_first_point_settles(simulated_rig, kind="measurement")
+    result = run_sweep(short_plan(), simulated_rig, tmp_path, on_event=on_event)
+    assert result.status == "completed" and dropping.wait(timeout=30)
+    tailed = result.run_directories[0]
+    frame = load_recording(tailed).set_points_frame()
+    first_measurement = frame[frame["kind"] == "measurement"].iloc[0]
+    assert (
+        first_measurement["retakes"] == 0 and first_measurement["samples_missing_in_record"] >= 25
+    )
+    with pytest.raises(UserInputError, match="samples lost inside the record") as refused:
+        cycle_averaged_table(result.run_directories)
+    assert str(tailed) in str(refused.value)
