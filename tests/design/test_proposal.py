@@ -270,6 +270,11 @@ def test_propose_command_on_study_data(tmp_path: Path) -> None:
     if answer["targets_met"]:
         assert answer["steady_state"]["theta_ss_deg"]["value"] == pytest.approx(25.0, abs=1e-4)
         assert answer["oscillatory_mode"]["damping_ratio"]["value"] >= 0.5 - 1e-6
+    # Table 4 has derivatives at 98 mm only: at 57 mm every derivative trend is named as extrapolated, and why;
+    # the steady-state trends (fitted at 57-126 mm) are not.
+    notes = answer["extrapolation_notes"]
+    assert {"Mq", "Xu", "Mu"} <= set(notes) and "theta_ss_rad" not in notes
+    assert "every fitted observation has 0.098" in notes["Mq"]
     for path in answer["files"].values():
         assert Path(path).stat().st_size > 0
 

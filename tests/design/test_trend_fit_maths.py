@@ -255,3 +255,19 @@ def test_collinear_features_are_refused():
     ]
     with pytest.raises(UserInputError, match="linearly dependent"):
         fit_quantity_trend(observations, "Mq", "linear")
+
+
+def test_a_design_on_the_edge_of_the_fitted_range_is_inside_it():
+    """The optimiser holds a design on a range bound only to solver tolerance: 1e-8 beyond the largest fitted x_h
+    is still inside (no note), 1e-4 beyond is outside and says which feature."""
+    observations = [
+        _observation(tail, x, 0.0 + i) for i, (tail, x) in enumerate(COVERAGE_CONFIGURATIONS)
+    ]
+    trend = fit_quantity_trend(observations, "Mq", "linear")
+    largest_x_h_m = max(x for _, x in COVERAGE_CONFIGURATIONS) / 1000
+    on_edge = trend.predict_geometry(TAILS["S3"].geometry, largest_x_h_m * (1 + 1e-8))
+    assert (
+        not on_edge.outside_fitted_range and on_edge.extrapolation_note == "inside the fitted range"
+    )
+    beyond = trend.predict_geometry(TAILS["S3"].geometry, largest_x_h_m * (1 + 1e-4))
+    assert beyond.outside_fitted_range and "x_h_m" in beyond.extrapolation_note
