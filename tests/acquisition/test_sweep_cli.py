@@ -57,6 +57,17 @@ def test_sweep_command_records_and_prints_one_json_object(tmp_path):
     # Tailed: tare, 2 steady states, 2 velocities; tailless: tare, 2 steady states.
     assert result["completed_points"] == result["total_points"] == 8
     assert len(result["run_directories"]) == 2
+    # Link health per run, as the files say it: samples lost by counter gaps, and points recorded again.
+    assert [health["run_directory"] for health in result["link_health"]] == result[
+        "run_directories"
+    ]
+    for health in result["link_health"]:
+        recording = load_recording(health["run_directory"])
+        assert health["samples_lost"] == sum(
+            gap.missing_samples for gap in recording.counter_gaps()
+        )
+        retaken = recording.set_points_frame()["retakes"] > 0
+        assert health["set_points_retaken"] == int(retaken.sum())
     listing = json.loads(
         run_ornitail("runs", "--data-root", str(tmp_path / "data"), "--json").stdout
     )
