@@ -9,6 +9,7 @@ one instrument. Port failures and silence raise :class:`InstrumentDisconnected`,
 from __future__ import annotations
 
 import contextlib
+import termios
 import threading
 import time
 
@@ -78,12 +79,15 @@ class LineInstrumentConnection:
             raise InstrumentDisconnected(self.name, f"port {self.port} is not open")
         with self._lock:
             try:
+                # A reply left over from an exchange cut short (a timeout, an abort between write and read)
+                # would otherwise be read as this command's answer, and every later one would be off by one.
+                self._serial.reset_input_buffer()
                 self._serial.write(command.encode("ascii") + b"\n")
                 reply = b""
                 deadline = time.monotonic() + self.reply_timeout_s
                 while not reply.endswith(b"\n") and time.monotonic() < deadline:
                     reply += self._serial.read_until(b"\n")
-            except OSError as error:
+            except (OSError, termios.error) as error:  # termios.error: flushing a vanished port
                 raise InstrumentDisconnected(
                     self.name, f"port {self.port} failed: {error}"
                 ) from None

@@ -435,7 +435,8 @@ def run_sweep(
         if balance_stream is None:
             try:
                 stream.stop()
-            except InstrumentError as error:  # a balance that failed mid-run is already the run's reason
+            except InstrumentError as error:
+                # a balance that failed mid-run is already the run's reason
                 if result.status == "completed":
                     result.status, result.message = "failed", str(error)
         rig.safe_state()

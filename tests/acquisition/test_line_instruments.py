@@ -123,6 +123,22 @@ def test_fan_spins_up_gradually_and_drives_the_tunnel_velocity(
     fan.close()
 
 
+def test_a_reply_left_over_from_a_cut_exchange_is_not_taken_for_the_next_one(simulated_fan):
+    """A set command whose reply was never read (the exchange was interrupted between write and read) leaves
+    ``OK`` waiting on the port; the next query must still get its own ``RPM <value>`` reply, not that ``OK``."""
+    fan = TunnelFanDriver(simulated_fan.port_path, max_rpm=1500.0, name="tunnel fan")
+    fan.open()
+    port = fan.connection._serial
+    port.write(b"RPM 800\n")  # what query() writes; the reply is left unread
+    deadline = time.monotonic() + 2.0
+    while port.in_waiting == 0 and time.monotonic() < deadline:
+        time.sleep(0.005)
+    assert port.in_waiting > 0  # the stale "OK" is waiting
+    assert fan.read_target_rpm() == 800.0
+    fan.set_rpm(0.0)
+    fan.close()
+
+
 def test_fan_refuses_set_point_above_limit_before_sending(simulated_fan):
     fan = TunnelFanDriver(simulated_fan.port_path, max_rpm=1500.0, name="tunnel fan")
     fan.open()

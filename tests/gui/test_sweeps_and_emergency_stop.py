@@ -2,6 +2,8 @@
 
 import math
 
+import pytest
+
 from ornitail.acquisition.catalog import RunCatalog
 from ornitail.acquisition.recording_reader import load_recording
 
@@ -55,7 +57,10 @@ def _motor_and_fan_at_rest(window):
 def _restart(window, qtbot, button):
     window.sweep_panel.last_result = None
     button.click()
-    qtbot.waitUntil(lambda: window.session.sweep_running, timeout=10_000)
+    try:
+        qtbot.waitUntil(lambda: window.session.sweep_running, timeout=10_000)
+    except qtbot.TimeoutError:
+        pytest.fail(f"the sweep did not start again; the window's log:\n{window.log.toPlainText()}")
 
 
 def test_abort_pause_resume_complete_and_process_a_sweep(connected, qtbot, tmp_path):
