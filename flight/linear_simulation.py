@@ -1,9 +1,10 @@
 """Simulating a discrete linear model and its output sensitivities (exact, by the chain rule).
 
-For x[k+1] = Ad x[k] + Bd u[k], y[k] = C x[k] + D u[k], the sensitivity of the state to a
-parameter p obeys the same recursion driven by the derivative matrices,
-dx[k+1]/dp = Ad dx[k]/dp + (dAd/dp) x[k] + (dBd/dp) u[k], and dx[0]/dx0 = I for an estimated
-initial state; then dy[k]/dp = C dx[k]/dp + (dC/dp) x[k] + (dD/dp) u[k]. The derivative matrices
+For x[k+1] = Ad x[k] + Bd u[k] + Bn u[k+1], y[k] = C x[k] + D u[k] (Bn = 0 under a zero-order
+hold; :mod:`ornitail.flight.discretisation`), the sensitivity of the state to a parameter p obeys
+the same recursion driven by the derivative matrices,
+dx[k+1]/dp = Ad dx[k]/dp + (dAd/dp) x[k] + (dBd/dp) u[k] + (dBn/dp) u[k+1], and dx[0]/dx0 = I
+for an estimated initial state; then dy[k]/dp = C dx[k]/dp + (dC/dp) x[k] + (dD/dp) u[k]. The derivative matrices
 come from CasADi's differentiation of the discretisation (:mod:`ornitail.flight.discretisation`),
 so the sensitivities are exact, not finite differences.
 """
@@ -51,11 +52,17 @@ def propagate(transition: np.ndarray, forcing: np.ndarray, initial: np.ndarray) 
     return result[..., 0] if vector else result
 
 
+def next_inputs(inputs: np.ndarray) -> np.ndarray:
+    """u[k+1] for every k (the last sample repeated: it only drives a state past the record)."""
+    return np.concatenate([inputs[1:], inputs[-1:]])
+
+
 def simulate_outputs(
     model: DiscreteModel, initial_state: np.ndarray, inputs: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Outputs (N, outputs) and states (N, states) of the discrete model for inputs (N, inputs)."""
-    states = propagate(model.ad, inputs @ model.bd.T, initial_state)
+    forcing = inputs @ model.bd.T + next_inputs(inputs) @ model.bd_next.T
+    states = propagate(model.ad, forcing, initial_state)
     return states @ model.c.T + inputs @ model.d.T, states
 
 
@@ -78,8 +85,10 @@ def output_sensitivities(
     """
     state_count = model.ad.shape[0]
     parameter_count = len(parameter_indices)
-    forcing = _times_stack(states, model.d_ad[parameter_indices]) + _times_stack(
-        inputs, model.d_bd[parameter_indices]
+    forcing = (
+        _times_stack(states, model.d_ad[parameter_indices])
+        + _times_stack(inputs, model.d_bd[parameter_indices])
+        + _times_stack(next_inputs(inputs), model.d_bd_next[parameter_indices])
     )
     initial = np.zeros((state_count, parameter_count))
     if initial_state_columns:

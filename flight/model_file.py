@@ -27,6 +27,7 @@ from ornitail.flight.state_space import NumericStateSpace
 
 PRESET_DIRECTORY = Path(__file__).resolve().parent / "models"
 INITIAL_STATE_RULES = ("estimate", "data", "zero")
+INPUT_HOLDS = ("first_order", "zero_order")
 DATA_STATISTICS = ("mean", "median", "first")
 MATRIX_NAMES = ("A", "B", "C", "D")
 CASADI_FUNCTIONS = {name: getattr(casadi, name) for name in FUNCTION_NAMES}
@@ -42,6 +43,7 @@ class ParameterSpec:
     lower: float = -math.inf
     upper: float = math.inf
     fixed: bool = False
+    unit: str = ""
 
 
 @dataclass(frozen=True)
@@ -88,6 +90,7 @@ class StateSpaceModelSpec:
     time_column: str
     time_scale: float = 1.0
     initial_state: str = "estimate"
+    input_hold: str = "first_order"
     description: str = ""
     _functions: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
 
@@ -123,6 +126,13 @@ class StateSpaceModelSpec:
             require_finite_value(f"{self.source}: [constants].{name}", value)
             constants[name] = float(value)
         return replace(self, constants=constants, data_constants=tuple(data_constants))
+
+    def with_input_hold(self, input_hold: str) -> StateSpaceModelSpec:
+        """A copy that holds the sampled inputs between samples as ``input_hold`` says:
+        ``first_order`` (linear between samples, for measured continuous inputs) or
+        ``zero_order`` (constant over each interval, for a held digital command).
+        """
+        return replace(self, input_hold=_checked_input_hold(input_hold, "input_hold"))
 
     def with_starts(self, values: Mapping[str, float]) -> StateSpaceModelSpec:
         """A copy with new start values for some parameters (fixed ones stay at their value)."""
@@ -247,7 +257,7 @@ def model_from_document(document: Mapping[str, Any], source: str) -> StateSpaceM
     model_table = _table(document, "model", source, required=True)
     _reject_unknown_keys(
         model_table,
-        ("name", "description", "states", "inputs", "outputs", "initial_state"),
+        ("name", "description", "states", "inputs", "outputs", "initial_state", "input_hold"),
         source,
         "[model]",
     )
@@ -269,6 +279,10 @@ def model_from_document(document: Mapping[str, Any], source: str) -> StateSpaceM
             f"{source}: [model].initial_state",
             f"must be one of {', '.join(INITIAL_STATE_RULES)}, got {initial_state!r}",
         )
+
+    input_hold = _checked_input_hold(
+        model_table.get("input_hold", "first_order"), f"{source}: [model].input_hold"
+    )
 
     constants, data_constants = _constants(_table(document, "constants", source), source)
     parameters = _parameters(_table(document, "parameters", source, required=True), source)
@@ -342,8 +356,15 @@ def model_from_document(document: Mapping[str, Any], source: str) -> StateSpaceM
         time_column=time_column,
         time_scale=time_scale,
         initial_state=initial_state,
+        input_hold=input_hold,
         description=description,
     )
+
+
+def _checked_input_hold(value: Any, where: str) -> str:
+    if value not in INPUT_HOLDS:
+        raise UserInputError(where, f"must be one of {', '.join(INPUT_HOLDS)}, got {value!r}")
+    return value
 
 
 def _table(
@@ -431,7 +452,7 @@ def _parameters(table: Mapping[str, Any], source: str) -> tuple[ParameterSpec, .
         if not isinstance(value, dict):
             value = {"start": value}
         _reject_unknown_keys(
-            value, ("start", "lower", "upper", "fixed"), source, f"[parameters].{name}"
+            value, ("start", "lower", "upper", "fixed", "unit"), source, f"[parameters].{name}"
         )
         if "start" not in value:
             raise UserInputError(f"{where}.start", "start value missing")
@@ -453,7 +474,10 @@ def _parameters(table: Mapping[str, Any], source: str) -> tuple[ParameterSpec, .
         fixed = value.get("fixed", False)
         if not isinstance(fixed, bool):
             raise UserInputError(f"{where}.fixed", "must be true or false")
-        parameters.append(ParameterSpec(name, start, lower, upper, fixed))
+        unit = value.get("unit", "")
+        if not isinstance(unit, str):
+            raise UserInputError(f"{where}.unit", f"must be a string such as '1/s', got {unit!r}")
+        parameters.append(ParameterSpec(name, start, lower, upper, fixed, unit))
     if all(parameter.fixed for parameter in parameters):
         raise UserInputError(f"{source}: [parameters]", "every parameter is fixed")
     return tuple(parameters)

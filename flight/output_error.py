@@ -1,14 +1,16 @@
 """Output-error maximum-likelihood estimation of a model file's parameters.
 
-The model is discretised with a zero-order hold (exact matrix exponential), simulated on the
-measured inputs, and its parameters (and initial state, if the model estimates it) are adjusted by
-Levenberg-Marquardt steps with exact output sensitivities on the ML cost N/2 log det R(theta),
-where the diagonal noise covariance R(theta) is re-estimated from the residuals at every iterate.
+The model is discretised exactly under its input hold (first-order by default, zero-order on
+request; :mod:`ornitail.flight.discretisation`), simulated on the measured inputs, and its
+parameters (and initial state, if the model estimates it) are adjusted by Levenberg-Marquardt steps
+with exact output sensitivities on the ML cost N/2 log det R(theta), where the diagonal noise
+covariance R(theta) is re-estimated from the residuals at every iterate.
 Its Gauss-Newton Hessian is the Fisher information minus a term for R's dependence on theta;
 keeping that term makes the iteration converge in a few steps where the plain relaxation
 (re-estimate R, then a Gauss-Newton step with R fixed, as SIDPAC's ``oe``) converges linearly.
 Where that Hessian is not positive definite (far from the optimum) M itself is used. Standard
-errors: Cramer-Rao (inverse of M = sum S^T R^-1 S) and corrected for colored residuals.
+errors: Cramer-Rao (inverse of M = sum S^T R^-1 S) and corrected for colored residuals as SIDPAC's
+``m_colores`` does (or tapered, as an option).
 
 Divergence is reported, never hidden: a non-finite simulation, no step that lowers the cost, a
 parameter stuck on a bound, a singular information matrix or the iteration limit all end the
@@ -32,14 +34,17 @@ from ornitail.flight.result_assembly import assemble_result
 
 @dataclass(frozen=True)
 class OutputErrorOptions:
-    """Iteration controls. Converged when every component of the undamped Gauss-Newton step is
-    below ``step_tolerance`` times its Cramer-Rao sigma.
+    """Iteration controls and the colored-residual sigma formula. Converged when every
+    component of the undamped Gauss-Newton step is below ``step_tolerance`` times its Cramer-Rao
+    sigma. ``colored_sigma``: ``morelli`` (SIDPAC's ``m_colores``, the default) or ``tapered``
+    (:mod:`ornitail.flight.residual_statistics`).
     """
 
     max_iterations: int = 100
     step_tolerance: float = 1e-3
     bound_iterations_allowed: int = 3
     max_damping: float = 1e10
+    colored_sigma: str = "morelli"
 
 
 class OutputErrorProblem:
@@ -213,7 +218,7 @@ def estimate_output_error(
             break
         outputs, sensitivities = problem.outputs_and_sensitivities(theta)
 
-    return _finish(problem, theta, iterations, converged, message)
+    return _finish(problem, theta, iterations, converged, message, options.colored_sigma)
 
 
 def _newton_terms(
@@ -258,7 +263,12 @@ def _theta_name(problem: OutputErrorProblem, index: int) -> str:
 
 
 def _finish(
-    problem: OutputErrorProblem, theta: np.ndarray, iterations: int, converged: bool, message: str
+    problem: OutputErrorProblem,
+    theta: np.ndarray,
+    iterations: int,
+    converged: bool,
+    message: str,
+    colored_sigma: str,
 ) -> IdentificationResult:
     spec, signals = problem.spec, problem.signals
     count = len(problem.free_names)
@@ -273,7 +283,7 @@ def _finish(
         if condition < 1e14:
             covariance = np.linalg.inv(information)
             covariance_colored = colored_residual_covariance(
-                sensitivities * weights[None, :, None], residuals, information
+                sensitivities * weights[None, :, None], residuals, information, colored_sigma
             )
         else:
             covariance = covariance_colored = np.full((size, size), np.nan)

@@ -83,13 +83,86 @@ def residual_tests(
     return ResidualTests(bound, max_auto, white, max_cross, independent)
 
 
+COLORED_SIGMA_METHODS = ("morelli", "tapered")
+
+
 def colored_residual_covariance(
+    weighted_sensitivities: np.ndarray,
+    residuals: np.ndarray,
+    information: np.ndarray,
+    method: str = "morelli",
+) -> np.ndarray:
+    """Parameter covariance corrected for colored residuals by ``method`` (see
+    :func:`morelli_colored_covariance` and :func:`tapered_colored_covariance`).
+    """
+    if method == "morelli":
+        return morelli_colored_covariance(weighted_sensitivities, residuals, information)
+    if method == "tapered":
+        return tapered_colored_covariance(weighted_sensitivities, residuals, information)
+    raise ValueError(f"unknown colored-residual method {method!r}")
+
+
+def residual_correlations(residuals: np.ndarray, unbiased: bool = True) -> np.ndarray:
+    """R[l, a, b] = sum_k v_a[k + l] v_b[k] / (N - l) (or / N when not ``unbiased``), l = 0..N-1:
+    every channel pair's residual correlation at every non-negative lag, as SIDPAC's ``xcorrs``.
+    """
+    count, channels = residuals.shape
+    length = 2 * count
+    spectra = np.fft.rfft(residuals, n=length, axis=0)
+    products = spectra[:, :, None] * np.conj(spectra)[:, None, :]
+    correlations = np.fft.irfft(products, n=length, axis=0)[:count]
+    divisor = count - np.arange(count) if unbiased else np.full(count, count)
+    return correlations / divisor[:, None, None]
+
+
+def morelli_colored_covariance(
+    weighted_sensitivities: np.ndarray, residuals: np.ndarray, information: np.ndarray
+) -> np.ndarray:
+    """Parameter covariance corrected for colored residuals as NASA SIDPAC's ``m_colores.m``
+    computes it (Morelli and Klein, "Aircraft System Identification", 2006, section 6.7):
+
+    Cov = M^-1 [sum_i sum_j (W S_i)^T R(|j - i|) (W S_j)] M^-1,
+
+    with S_i the output sensitivities at sample i, W the inverse noise covariance, and R(l) the
+    channels' residual correlation matrix at lag l over *all* lags 0..N-1, unbiased (divided by
+    N - l) as ``m_colores`` gets it from ``xcorrs``; R(l)[a, b] = sum_k v_a[k+l] v_b[k]/(N - l),
+    used for both signs of j - i as SIDPAC does. The double sum is a Toeplitz product, formed for
+    each channel pair by one FFT convolution.
+
+    Parameters
+    ----------
+    weighted_sensitivities : (N, channels, parameters) array
+        W S_k: sensitivities multiplied by the channel weights (inverse noise variances).
+    residuals : (N, channels) array
+    information : (parameters, parameters) array
+        M = sum_k S_k^T W S_k.
+    """
+    count, channels, size = weighted_sensitivities.shape
+    length = 2 * count
+    correlations = residual_correlations(residuals)
+    kernel = np.zeros((length, channels, channels))
+    kernel[:count] = correlations
+    kernel[count + 1 :] = correlations[1:][::-1]
+    kernel_spectra = np.fft.rfft(kernel, axis=0)
+    sensitivity_spectra = np.fft.rfft(weighted_sensitivities, n=length, axis=0)
+    # filtered[k, a, p] = sum_b sum_j R_ab(|k - j|) (W S_j)[b, p]
+    filtered = np.fft.irfft(
+        np.einsum("fab,fbp->fap", kernel_spectra, sensitivity_spectra), n=length, axis=0
+    )[:count]
+    middle = np.einsum("kap,kaq->pq", weighted_sensitivities, filtered)
+    inverse = np.linalg.pinv(information)
+    covariance = inverse @ middle @ inverse
+    return 0.5 * (covariance + covariance.T)
+
+
+def tapered_colored_covariance(
     weighted_sensitivities: np.ndarray,
     residuals: np.ndarray,
     information: np.ndarray,
     max_lag: int | None = None,
 ) -> np.ndarray:
-    """Parameter covariance corrected for colored residuals (Morelli and Klein's method).
+    """Parameter covariance corrected for colored residuals, with a truncated, tapered
+    autocorrelation (the option ``tapered``; ornitail's default before it followed SIDPAC).
 
     Cov = M^-1 [sum_i sum_j S_i^T W Rvv(j - i) W S_j] M^-1, with Rvv(l) the residual
     autocorrelation of each channel, estimated as (1/N) sum_k v[k] v[k+l] for |l| <= ``max_lag``

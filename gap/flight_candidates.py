@@ -98,6 +98,7 @@ def baseline_flight_model(spec: BaselineSpec) -> LinearFlightModel:
         iyy_kg_m2=float(constants.get("Iyy", math.nan)),
         theta0_rad=float(constants.get("theta0", math.nan)),
         airspeed_m_s=airspeed,
+        input_hold=model.input_hold,
     )
 
 

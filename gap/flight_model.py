@@ -2,8 +2,9 @@
 
 States [q (rad/s), u, w (m/s), theta (rad)] as deviations from trim, input elevator (rad), in the
 body frame of docs/frames.md; dx/dt = A x + B delta_e, outputs = states. The response on a
-manoeuvre starts from the measured first sample and is driven by the measured elevator (zero-order
-hold), optionally delayed by ``delay_s`` and with a measured-theta drift ``theta_drift_rad_s``
+manoeuvre starts from the measured first sample and is driven by the measured elevator (held
+between samples as the model says, first-order by default: :mod:`ornitail.flight.discretisation`),
+optionally delayed by ``delay_s`` and with a measured-theta drift ``theta_drift_rad_s``
 (rad/s) counted from the run-in's middle (the run-in mean is what the deviations are taken from).
 """
 
@@ -13,9 +14,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.linalg import expm
 
-from ornitail.flight.linear_simulation import propagate
+from ornitail.flight.discretisation import numeric_hold
+from ornitail.flight.linear_simulation import next_inputs, propagate
 from ornitail.gap.flight_data import FlightRun
 
 
@@ -36,6 +37,7 @@ class LinearFlightModel:
     airspeed_m_s: float
     delay_s: float = 0.0
     theta_drift_rad_s: float = 0.0
+    input_hold: str = "first_order"
 
     def with_matrices(self, a_matrix: np.ndarray, b_matrix: np.ndarray) -> LinearFlightModel:
         return replace(self, a_matrix=a_matrix, b_matrix=b_matrix)
@@ -56,31 +58,22 @@ def superpose(
     )
 
 
-def _zero_order_hold(
-    a_matrix: np.ndarray, b_matrix: np.ndarray, step_s: float
-) -> tuple[np.ndarray, np.ndarray]:
-    size, inputs = b_matrix.shape
-    block = np.zeros((size + inputs, size + inputs))
-    block[:size, :size] = a_matrix
-    block[:size, size:] = b_matrix
-    discrete = expm(block * step_s)
-    return discrete[:size, :size], discrete[:size, size:]
-
-
 def simulate_runs(model: LinearFlightModel, runs: Sequence[FlightRun]) -> list[np.ndarray]:
     """Predicted states (N, 4) of ``model`` on each manoeuvre (see the module docstring)."""
-    holds: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+    holds: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
     predictions = []
     for run in runs:
         step = round(run.time_step_s, 12)
         if step not in holds:
-            holds[step] = _zero_order_hold(model.a_matrix, model.b_matrix, run.time_step_s)
+            holds[step] = numeric_hold(
+                model.a_matrix, model.b_matrix, run.time_step_s, model.input_hold
+            )
         predictions.append(_simulate(model, run, *holds[step]))
     return predictions
 
 
 def _simulate(
-    model: LinearFlightModel, run: FlightRun, ad: np.ndarray, bd: np.ndarray
+    model: LinearFlightModel, run: FlightRun, ad: np.ndarray, bd: np.ndarray, bd_next: np.ndarray
 ) -> np.ndarray:
     elevator = run.elevator_rad
     if model.delay_s != 0.0:
@@ -88,7 +81,8 @@ def _simulate(
     start = run.states[0].copy()
     drift = model.theta_drift_rad_s * (run.time_s - 0.5 * run.input_start_s)
     start[3] -= drift[0]  # the measured first theta holds the drift; the motion starts without it
-    predicted = propagate(ad, elevator[:, None] @ bd.T, start)
+    inputs = elevator[:, None]
+    predicted = propagate(ad, inputs @ bd.T + next_inputs(inputs) @ bd_next.T, start)
     predicted[:, 3] += drift
     if not np.all(np.isfinite(predicted)):
         return np.full_like(predicted, 1e6)

@@ -38,13 +38,15 @@ def truth():
 
 @cache
 def model_without_mean_removal(tmp_root: str):
-    """The preset with deviation columns (no start-mean removal: the data are deviations)."""
+    """The preset with deviation columns (no start-mean removal: the data are deviations) and a
+    zero-order hold: the data come from a held digital doublet, discretised with a zero-order hold.
+    """
     text = (PRESET_DIRECTORY / "delfly_longitudinal.toml").read_text()
     text = text.replace(", remove_start_mean_s = 0.4", "")
     path = f"{tmp_root}/delfly_deviations.toml"
     with open(path, "w") as handle:
         handle.write(text)
-    return load_model(path).with_constants(truth()[1])
+    return load_model(path).with_constants(truth()[1]).with_input_hold("zero_order")
 
 
 def simulated_manoeuvre(model, seed: int, noise_scale: float = 1.0) -> pd.DataFrame:
