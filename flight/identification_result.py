@@ -10,6 +10,7 @@ import pandas as pd
 
 from ornitail.core.errors import UserInputError
 from ornitail.flight.discretisation import discretise
+from ornitail.flight.fit_report import fit_warnings
 from ornitail.flight.linear_simulation import simulate_outputs
 from ornitail.flight.model_data import model_data
 from ornitail.flight.model_file import StateSpaceModelSpec
@@ -130,16 +131,22 @@ class IdentificationResult:
         return frame
 
     def summary(self) -> dict[str, Any]:
-        """The JSON of ``ornitail flight identify`` plus the diagnostics (plain Python types)."""
+        """The JSON of ``ornitail flight identify`` (plain Python types): each parameter's value
+        and sigmas in its ``unit``, the fit per output, the eigenvalues of A (1/s), the input hold
+        and the warnings of :func:`~ornitail.flight.fit_report.fit_warnings`.
+        """
         return {
             "parameters": {
                 name: {
                     "value": estimate.value,
                     "sigma": estimate.sigma,
                     "sigma_colored": estimate.sigma_colored,
+                    "unit": self.model.parameter(name).unit,
                 }
                 for name, estimate in self.parameters.items()
             },
             "fit": dict(self.fit),
             "eigenvalues": [[float(value.real), float(value.imag)] for value in self.eigenvalues],
+            "input_hold": self.model.input_hold,
+            "warnings": fit_warnings(self.fit, self.residual_tests),
         }

@@ -23,9 +23,9 @@ def test_identify_json_is_exactly_the_documented_object():
     )
     assert result.exit_code == 0, result.output
     data = json.loads(result.output)
-    assert set(data) == {"parameters", "fit", "eigenvalues"}
-    assert set(data["parameters"]["Ma"]) == {"value", "sigma", "sigma_colored"}
-    assert data["parameters"]["Ma"]["value"] == pytest.approx(-9.69, abs=0.05)
+    assert set(data) == {"parameters", "fit", "eigenvalues", "input_hold", "warnings"}
+    assert set(data["parameters"]["Ma"]) == {"value", "sigma", "sigma_colored", "unit"}
+    assert data["parameters"]["Ma"]["value"] == pytest.approx(-9.45, abs=0.05)
     assert set(data["fit"]) == {"alpha", "q", "a_z"} and min(data["fit"].values()) > 0.9
     assert len(data["eigenvalues"]) == 2 and all(len(pair) == 2 for pair in data["eigenvalues"])
 
@@ -79,7 +79,13 @@ def test_console_script_runs_identify():
         timeout=120,
     )
     assert completed.returncode == 0, completed.stderr
-    assert set(json.loads(completed.stdout)) == {"parameters", "fit", "eigenvalues"}
+    assert set(json.loads(completed.stdout)) == {
+        "parameters",
+        "fit",
+        "eigenvalues",
+        "input_hold",
+        "warnings",
+    }
     missing = subprocess.run(
         [script, "flight", "identify", "--model", "delfly_longitudinal", "--data", CSV_PATH],
         capture_output=True,

@@ -23,10 +23,24 @@ def _integrator() -> LinearFlightModel:
 def test_zero_order_hold_integrates_a_step_exactly():
     elevator = np.where(np.arange(200) >= 40, 0.1, 0.0)
     run = _run(elevator)
-    (predicted,) = simulate_runs(_integrator(), [run])
+    held = LinearFlightModel(**{**_integrator().__dict__, "input_hold": "zero_order"})
+    (predicted,) = simulate_runs(held, [run])
     elapsed = np.clip(run.time_s - run.time_s[40], 0.0, None)
     np.testing.assert_allclose(predicted[:, 0], 0.2 * elapsed, atol=1e-12)
     np.testing.assert_allclose(predicted[:, 3], 0.1 * elapsed**2, atol=1e-12)
+
+
+def test_first_order_hold_integrates_the_sampled_step_as_a_ramp_between_samples():
+    """The default: the step sampled at 39 -> 40 is a ramp over that interval, so the integral
+    leads the zero-order hold's by half a sample.
+    """
+    elevator = np.where(np.arange(200) >= 40, 0.1, 0.0)
+    run = _run(elevator)
+    (predicted,) = simulate_runs(_integrator(), [run])
+    step = run.time_s[1] - run.time_s[0]
+    elapsed = np.clip(run.time_s - run.time_s[40] + step / 2, 0.0, None)
+    elapsed[:40] = 0.0
+    np.testing.assert_allclose(predicted[:, 0], 0.2 * elapsed, atol=1e-12)
 
 
 def test_delay_shifts_the_response_by_the_delay():
