@@ -4,8 +4,10 @@ Steps (domain.md section 5): cut and pre-process the manoeuvres (:mod:`manoeuvre
 model per manoeuvre (:mod:`manoeuvre_models`); drop diverged fits; simulate each model on its
 measured input and flag it (:mod:`validation`); split the accepted manoeuvres 70/30 with the seed;
 build the mean, covariance-weighted and time-averaged-response models on the 70 %
-(:mod:`averaged_models`); score each on the 30 % by the normalised RMS error; the best scorer is
-the configuration's representative model.
+(:mod:`averaged_models`); score each on every validation manoeuvre (the 30 %) by normalised RMS
+error and mean Pearson correlation; the representative model is chosen by the campaign's
+selection rule (:func:`validation.select_representative`: by default the model that scores best
+on the most validation manoeuvres, on both criteria).
 """
 
 from __future__ import annotations
@@ -28,13 +30,22 @@ from ornitail.flight.manoeuvre_models import (
     simulate_parameters,
     trim_constants,
 )
-from ornitail.flight.manoeuvres import Manoeuvre, SteadyState, cut_manoeuvres
+from ornitail.flight.manoeuvres import (
+    DEFAULT_GLITCH_RULE,
+    Manoeuvre,
+    SteadyState,
+    cut_manoeuvres,
+)
 from ornitail.flight.model_file import StateSpaceModelSpec, load_model
 from ornitail.flight.result_assembly import mode_estimates
 from ornitail.flight.validation import (
+    DEFAULT_SELECTION_RULE,
     RejectionFlags,
+    ValidationScores,
+    mean_pcc,
     normalised_rms,
     rejection_flags,
+    select_representative,
     split_training_validation,
 )
 from ornitail.sim.configuration import VehicleConfiguration
@@ -60,7 +71,9 @@ class ConfigurationResult:
 
     ``models`` are the converged manoeuvre models (``flags`` rows follow them); ``accepted`` and
     ``training``/``validation`` are indices into ``models``; ``scores`` the mean normalised RMS
-    of each averaged model on the validation manoeuvres (lower is better).
+    of each averaged model on the validation manoeuvres (lower is better), ``validation_scores``
+    the scores per manoeuvre; ``selection_rule`` picked ``representative`` and ``glitch_rule``
+    found the elevator glitches.
     """
 
     configuration: ConfigurationSpec
@@ -77,6 +90,9 @@ class ConfigurationResult:
     validation: np.ndarray
     averaged: tuple[AveragedModel, ...]
     scores: dict[str, float]
+    validation_scores: ValidationScores
+    selection_rule: str
+    glitch_rule: str
     representative: AveragedModel
     representative_modes: list[ModeEstimate]
     representative_eigenvalues: np.ndarray
@@ -90,16 +106,19 @@ class ConfigurationResult:
 
 @dataclass(frozen=True)
 class ConfigurationData:
-    """Manoeuvres of a configuration, its mass properties, and the simulator's linear model when
-    the flights were simulated.
+    """Manoeuvres of a configuration, its mass properties, the simulator's linear model when
+    the flights were simulated, and the glitch rule the manoeuvres were cut with.
     """
 
     manoeuvres: tuple[Manoeuvre, ...]
     mass: MassProperties
     simulator_reference: LinearisedModel | None = None
+    glitch_rule: str = DEFAULT_GLITCH_RULE
 
 
-def simulated_configuration_data(configuration: ConfigurationSpec, seed: int) -> ConfigurationData:
+def simulated_configuration_data(
+    configuration: ConfigurationSpec, seed: int, glitch_rule: str = DEFAULT_GLITCH_RULE
+) -> ConfigurationData:
     """Fly ``configuration.simulated_manoeuvres`` doublets in the simulator (one flight, 8 s per
     manoeuvre) and cut them; mass and effective pitch inertia from the simulator's vehicle.
     """
@@ -113,12 +132,16 @@ def simulated_configuration_data(configuration: ConfigurationSpec, seed: int) ->
     period_s = FlightPlan().manoeuvre_period_s
     plan = FlightPlan(duration_s=configuration.simulated_manoeuvres * period_s)
     log = simulate_flight(vehicle, plan=plan, seed=seed)
-    manoeuvres = cut_manoeuvres(log, f"simulated {configuration.label} (seed {seed})")
+    manoeuvres = cut_manoeuvres(
+        log, f"simulated {configuration.label} (seed {seed})", glitch_rule=glitch_rule
+    )
     mass = MassProperties(reference.mass_kg, reference.iyy_kg_m2)
-    return ConfigurationData(tuple(manoeuvres), mass, reference)
+    return ConfigurationData(tuple(manoeuvres), mass, reference, glitch_rule)
 
 
-def logged_configuration_data(configuration: ConfigurationSpec) -> ConfigurationData:
+def logged_configuration_data(
+    configuration: ConfigurationSpec, glitch_rule: str = DEFAULT_GLITCH_RULE
+) -> ConfigurationData:
     """Read and cut every flight log of ``configuration`` (mass properties must be given)."""
     if configuration.mass_kg is None or configuration.iyy_kg_m2 is None:
         raise UserInputError(
@@ -129,9 +152,13 @@ def logged_configuration_data(configuration: ConfigurationSpec) -> Configuration
     manoeuvres: list[Manoeuvre] = []
     for source in configuration.logs:
         log = read_flight_log(source.path)
-        manoeuvres += cut_manoeuvres(log, str(source.path), source.time_range_s)
+        manoeuvres += cut_manoeuvres(
+            log, str(source.path), source.time_range_s, glitch_rule=glitch_rule
+        )
     return ConfigurationData(
-        tuple(manoeuvres), MassProperties(configuration.mass_kg, configuration.iyy_kg_m2)
+        tuple(manoeuvres),
+        MassProperties(configuration.mass_kg, configuration.iyy_kg_m2),
+        glitch_rule=glitch_rule,
     )
 
 
@@ -150,6 +177,7 @@ def analyse_configuration(
     spec: StateSpaceModelSpec,
     seed: int,
     progress: ProgressCallback | None = None,
+    selection_rule: str = DEFAULT_SELECTION_RULE,
 ) -> ConfigurationResult:
     """Run the campaign procedure on one configuration's manoeuvres (module docstring)."""
     report = progress or (lambda fraction, note: None)
@@ -187,27 +215,10 @@ def analyse_configuration(
     training, validation = accepted[training_positions], accepted[validation_positions]
     report(0.9, f"{configuration.label}: averaged models")
     averaged = averaged_models(trimmed_spec, [models[index] for index in training])
-    scores = {
-        candidate.name: float(
-            np.mean(
-                [
-                    normalised_rms(
-                        *simulate_parameters(
-                            trimmed_spec,
-                            candidate.parameter_values(),
-                            models[index].manoeuvre.deviations,
-                        )
-                    )
-                    for index in validation
-                ]
-            )
-        )
-        for candidate in averaged
-    }
-    finite_scores = {name: score for name, score in scores.items() if math.isfinite(score)}
-    if not finite_scores:
-        raise UserInputError(configuration.label, "no averaged model could be simulated")
-    best = min(finite_scores, key=finite_scores.__getitem__)
+    scores = score_on_validation(
+        trimmed_spec, averaged, [models[index].manoeuvre for index in validation]
+    )
+    best = select_representative(scores, selection_rule, configuration.label)
     representative = next(candidate for candidate in averaged if candidate.name == best)
     responses = tuple(
         ValidationResponse(
@@ -234,13 +245,34 @@ def analyse_configuration(
         training=training,
         validation=validation,
         averaged=tuple(averaged),
-        scores=scores,
+        scores=scores.mean_rms(),
+        validation_scores=scores,
+        selection_rule=selection_rule,
+        glitch_rule=data.glitch_rule,
         representative=representative,
         representative_modes=modes,
         representative_eigenvalues=eigenvalues,
         validation_responses=responses,
         simulator_reference=data.simulator_reference,
     )
+
+
+def score_on_validation(
+    spec: StateSpaceModelSpec,
+    candidates: Sequence[AveragedModel],
+    manoeuvres: Sequence[Manoeuvre],
+) -> ValidationScores:
+    """Normalised RMS error and mean PCC of each candidate simulated on each manoeuvre."""
+    rms = np.empty((len(candidates), len(manoeuvres)))
+    pcc = np.empty_like(rms)
+    for row, candidate in enumerate(candidates):
+        for column, manoeuvre in enumerate(manoeuvres):
+            measured, simulated = simulate_parameters(
+                spec, candidate.parameter_values(), manoeuvre.deviations
+            )
+            rms[row, column] = normalised_rms(measured, simulated)
+            pcc[row, column] = mean_pcc(measured, simulated)
+    return ValidationScores(tuple(candidate.name for candidate in candidates), rms, pcc)
 
 
 def representative_modes(
@@ -259,11 +291,13 @@ def representative_modes(
     return mode_estimates(spec, all_parameters, constants, indices, covariance, covariance)
 
 
-def configuration_data(configuration: ConfigurationSpec, seed: int) -> ConfigurationData:
+def configuration_data(
+    configuration: ConfigurationSpec, seed: int, glitch_rule: str = DEFAULT_GLITCH_RULE
+) -> ConfigurationData:
     """The manoeuvres of a configuration: simulated when it asks for simulated manoeuvres."""
     if configuration.simulated_manoeuvres:
-        return simulated_configuration_data(configuration, seed)
-    return logged_configuration_data(configuration)
+        return simulated_configuration_data(configuration, seed, glitch_rule)
+    return logged_configuration_data(configuration, glitch_rule)
 
 
 def run_campaign(
@@ -273,18 +307,25 @@ def run_campaign(
     """Analyse every configuration of ``campaign``; ``progress(index, fraction, note)``.
 
     Configuration ``i`` (0-based) of a simulated campaign flies with seed ``campaign.seed + i``;
-    every configuration's 70/30 split uses ``campaign.seed``.
+    every configuration's 70/30 split uses ``campaign.seed``. ``campaign.input_hold``, when
+    given, replaces the model's input hold for every fit and simulation.
     """
     spec = load_model(campaign.model)
+    if campaign.input_hold is not None:
+        spec = spec.with_input_hold(campaign.input_hold)
     results = []
     for index, configuration in enumerate(campaign.configurations):
         if progress:
             progress(index, 0.0, f"{configuration.label}: reading data")
-        data = configuration_data(configuration, campaign.seed + index)
+        data = configuration_data(configuration, campaign.seed + index, campaign.glitch_rule)
 
         def report(fraction: float, note: str, index: int = index) -> None:
             if progress:
                 progress(index, fraction, note)
 
-        results.append(analyse_configuration(configuration, data, spec, campaign.seed, report))
+        results.append(
+            analyse_configuration(
+                configuration, data, spec, campaign.seed, report, campaign.selection_rule
+            )
+        )
     return results

@@ -2,14 +2,17 @@
 
 Input: a campaign file (``--campaign``), flight logs labelled by configuration
 (``--log S3@98=flight.csv``, repeatable) or simulated flights (``--simulate S3@98``,
-repeatable). Output: ``representative_models.csv`` / ``.json`` and the pictures (PNG and PDF) in
-``--out``; a progress bar on stderr; with ``--json`` exactly one JSON object on stdout.
+repeatable). ``--selection-rule``, ``--glitch-rule`` and ``--input-hold`` override the campaign
+file's rules (defaults: the study's rules, the model's own input hold). Output:
+``representative_models.csv`` / ``.json`` and the pictures (PNG and PDF) in ``--out``; a progress
+bar on stderr; with ``--json`` exactly one JSON object on stdout.
 """
 
 from __future__ import annotations
 
 import math
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -29,6 +32,9 @@ from ornitail.flight.campaign_file import (
 )
 from ornitail.flight.campaign_plots import write_campaign_pictures
 from ornitail.flight.campaign_table import write_campaign_table
+from ornitail.flight.manoeuvres import DEFAULT_GLITCH_RULE, GLITCH_RULES
+from ornitail.flight.model_file import INPUT_HOLDS
+from ornitail.flight.validation import DEFAULT_SELECTION_RULE, SELECTION_RULES
 
 PROGRESS_STEPS_PER_CONFIGURATION = 100
 
@@ -68,7 +74,12 @@ def _campaign_from_options(
     model: str | None,
     masses: tuple[str, ...],
     inertias: tuple[str, ...],
+    rules: dict[str, str | None],
 ) -> CampaignSpec:
+    """The campaign the options describe; ``rules`` (selection_rule, glitch_rule, input_hold)
+    given on the command line override the campaign file's.
+    """
+    overrides = {key: value for key, value in rules.items() if value is not None}
     sources = sum(bool(item) for item in (campaign_path, logs, simulate))
     if sources != 1:
         raise UserInputError(
@@ -76,10 +87,11 @@ def _campaign_from_options(
         )
     if campaign_path is not None:
         campaign = read_campaign_file(campaign_path)
-        return CampaignSpec(
-            campaign.configurations,
-            campaign.seed if seed is None else seed,
-            model or campaign.model,
+        return replace(
+            campaign,
+            seed=campaign.seed if seed is None else seed,
+            model=model or campaign.model,
+            **overrides,
         )
     mass_by_label = _per_label_number(masses, "--mass-kg")
     inertia_by_label = _per_label_number(inertias, "--iyy-kg-m2")
@@ -109,6 +121,7 @@ def _campaign_from_options(
         tuple(configurations.values()),
         DEFAULT_SEED if seed is None else seed,
         model or "delfly_longitudinal",
+        **overrides,
     )
 
 
@@ -117,7 +130,12 @@ def _render(result: dict[str, Any]) -> str:
         f"{'configuration':14s}{'model':>15s}{'theta0 deg':>11s}{'V m/s':>7s}{'f Hz':>7s}"
         f"{'zeta':>8s}{'wn rad/s':>9s}{'Mq':>11s}{'rejected':>9s}"
     )
-    lines = [header]
+    hold = result["input_hold"] or "the model's own"
+    lines = [
+        f"selection rule {result['selection_rule']}, glitch rule {result['glitch_rule']}, "
+        f"input hold {hold}",
+        header,
+    ]
     for row in result["configurations"]:
         mq = row["derivatives"].get("Mq", {}).get("value", float("nan"))
         lines.append(
@@ -189,6 +207,29 @@ def _render(result: dict[str, Any]) -> str:
     show_default=True,
     help="Directory for the table and the pictures.",
 )
+@click.option(
+    "--selection-rule",
+    type=click.Choice(SELECTION_RULES),
+    default=None,
+    help="How the representative model is chosen: most_wins (the study's: best on the most "
+    "validation manoeuvres by RMS and PCC) or lowest_mean_rms "
+    f"[default: the file's, else {DEFAULT_SELECTION_RULE}].",
+)
+@click.option(
+    "--glitch-rule",
+    type=click.Choice(GLITCH_RULES),
+    default=None,
+    help="Elevator glitches: steady_deviation (the study's: 25 deg or more from the steady "
+    "deflection) or sample_jump (25 deg or more from the last good sample) "
+    f"[default: the file's, else {DEFAULT_GLITCH_RULE}].",
+)
+@click.option(
+    "--input-hold",
+    type=click.Choice(INPUT_HOLDS),
+    default=None,
+    help="Input hold of the model's discretisation for every manoeuvre "
+    "[default: the file's, else the model's own].",
+)
 @click.option("--no-pictures", is_flag=True, help="Write the table only.")
 @json_option
 def campaign_command(
@@ -200,6 +241,9 @@ def campaign_command(
     model: str | None,
     masses: tuple[str, ...],
     inertias: tuple[str, ...],
+    selection_rule: str | None,
+    glitch_rule: str | None,
+    input_hold: str | None,
     out_directory: Path,
     no_pictures: bool,
     as_json: bool,
@@ -207,8 +251,9 @@ def campaign_command(
     """Cut manoeuvres, identify, validate and average: one representative model per
     configuration (the study's free-flight procedure).
     """
+    rules = {"selection_rule": selection_rule, "glitch_rule": glitch_rule, "input_hold": input_hold}
     campaign = _campaign_from_options(
-        campaign_path, logs, simulate, manoeuvres, seed, model, masses, inertias
+        campaign_path, logs, simulate, manoeuvres, seed, model, masses, inertias, rules
     )
     count = len(campaign.configurations)
     with click.progressbar(
@@ -224,18 +269,20 @@ def campaign_command(
             bar.update(max(0, target - bar.pos), note)
 
         results = run_campaign(campaign, progress)
-    csv_path, json_path, records = write_campaign_table(
-        results,
-        out_directory,
-        {"seed": campaign.seed, "model": campaign.model},
-    )
+    info = {
+        "seed": campaign.seed,
+        "model": campaign.model,
+        "selection_rule": campaign.selection_rule,
+        "glitch_rule": campaign.glitch_rule,
+        "input_hold": campaign.input_hold,
+    }
+    csv_path, json_path, records = write_campaign_table(results, out_directory, info)
     written = [csv_path, json_path]
     if not no_pictures:
         written += write_campaign_pictures(results, out_directory)
     emit(
         {
-            "seed": campaign.seed,
-            "model": campaign.model,
+            **info,
             "configurations": records,
             "written": [str(path) for path in written],
         },

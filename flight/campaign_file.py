@@ -5,7 +5,9 @@ A configuration is a tail (a study tail id such as ``S3``, or any id with its pl
 tail position x_h. Its data come from flight logs (each optionally restricted to a time range)
 or from the simulator. Mass and pitch inertia are needed by the DelFly model to turn the
 identified A-matrix entries into dimensional derivatives; for simulated flights they come from
-the simulator's vehicle model.
+the simulator's vehicle model. The campaign also names the rules it runs by: how the
+representative model is selected, how elevator glitches are detected, and (optionally) the input
+hold of the model's discretisation.
 """
 
 from __future__ import annotations
@@ -19,10 +21,18 @@ from typing import Any
 
 from ornitail.core.errors import UserInputError
 from ornitail.design.geometry import TailGeometry, study_tails
+from ornitail.flight.manoeuvres import DEFAULT_GLITCH_RULE, GLITCH_RULES
+from ornitail.flight.model_file import INPUT_HOLDS
+from ornitail.flight.validation import DEFAULT_SELECTION_RULE, SELECTION_RULES
 
 CONFIGURATION_LABEL = re.compile(r"^(?P<tail>[A-Za-z][A-Za-z0-9_]*)@(?P<x_h_mm>[0-9.]+)$")
 DEFAULT_SIMULATED_MANOEUVRES = 21
 DEFAULT_SEED = 2018
+_RULE_CHOICES = {  # optional top-level keys of a campaign file and their allowed values
+    "selection_rule": SELECTION_RULES,
+    "glitch_rule": GLITCH_RULES,
+    "input_hold": INPUT_HOLDS,
+}
 
 
 @dataclass(frozen=True)
@@ -57,11 +67,17 @@ class ConfigurationSpec:
 
 @dataclass(frozen=True)
 class CampaignSpec:
-    """Configurations to analyse, the split seed and the model (preset name or file path)."""
+    """Configurations to analyse, the split seed, the model (preset name or file path) and the
+    rules: ``selection_rule`` (:data:`SELECTION_RULES`), ``glitch_rule`` (:data:`GLITCH_RULES`)
+    and ``input_hold`` (:data:`INPUT_HOLDS`; None keeps the model's own).
+    """
 
     configurations: tuple[ConfigurationSpec, ...]
     seed: int = DEFAULT_SEED
     model: str = "delfly_longitudinal"
+    selection_rule: str = DEFAULT_SELECTION_RULE
+    glitch_rule: str = DEFAULT_GLITCH_RULE
+    input_hold: str | None = None
 
 
 def parse_configuration_label(label: str, where: str) -> tuple[str, float]:
@@ -144,7 +160,7 @@ def read_campaign_file(path: str | Path) -> CampaignSpec:
         document = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
         raise UserInputError(str(path), f"not a valid TOML file: {error}") from None
-    unknown = sorted(set(document) - {"seed", "model", "configuration"})
+    unknown = sorted(set(document) - {"seed", "model", "configuration", *_RULE_CHOICES})
     if unknown:
         raise UserInputError(f"{path}: {unknown[0]}", "unknown top-level key")
     seed = document.get("seed", DEFAULT_SEED)
@@ -163,7 +179,25 @@ def read_campaign_file(path: str | Path) -> CampaignSpec:
         for index, table in enumerate(tables)
     )
     _require_unique_labels(configurations, str(path))
-    return CampaignSpec(configurations=configurations, seed=seed, model=model)
+    rules = {key: _choice(document, key, str(path)) for key in _RULE_CHOICES}
+    return CampaignSpec(
+        configurations=configurations,
+        seed=seed,
+        model=model,
+        selection_rule=rules["selection_rule"] or DEFAULT_SELECTION_RULE,
+        glitch_rule=rules["glitch_rule"] or DEFAULT_GLITCH_RULE,
+        input_hold=rules["input_hold"],
+    )
+
+
+def _choice(document: dict[str, Any], key: str, where: str) -> str | None:
+    """The value of an optional top-level key that must be one of ``_RULE_CHOICES[key]``."""
+    value = document.get(key)
+    if value is not None and value not in _RULE_CHOICES[key]:
+        raise UserInputError(
+            f"{where}: {key}", f"must be one of {', '.join(_RULE_CHOICES[key])}, got {value!r}"
+        )
+    return value
 
 
 def _configuration_from_table(table: Any, where: str, base: Path) -> ConfigurationSpec:

@@ -3,8 +3,9 @@
 One row per configuration: tail and position, planform area and aspect ratio, mass properties, the
 steady state (means over the manoeuvres' run-ins), the representative model's derivatives with
 standard errors, its poles, the damping ratio and natural frequency of the oscillatory mode, which
-averaged model won, and the manoeuvre counts. SI units and radians (docs/frames.md), with the
-steady-state pitch also in degrees for reading.
+averaged model won and by which rule (with every averaged model's win counts and mean scores on
+the validation manoeuvres), the glitch rule and input hold used, and the manoeuvre counts. SI
+units and radians (docs/frames.md), with the steady-state pitch also in degrees for reading.
 """
 
 from __future__ import annotations
@@ -68,12 +69,20 @@ def representative_record(result: ConfigurationResult) -> dict[str, Any]:
         "w0_m_s": steady.w_m_s,
         "flapping_frequency_hz": steady.flapping_frequency_hz,
         "representative_model": representative.name,
+        "selection_rule": result.selection_rule,
+        "glitch_rule": result.glitch_rule,
+        "input_hold": result.spec.input_hold,
         "derivatives": derivatives,
         "poles": [
             [float(value.real), float(value.imag)] for value in result.representative_eigenvalues
         ],
         **_oscillatory(result),
         "scores": dict(result.scores),
+        "mean_pcc": result.validation_scores.mean_pcc(),
+        "wins": {
+            name: {**counts, "total": counts["rms"] + counts["pcc"]}
+            for name, counts in result.validation_scores.wins().items()
+        },
         "merge_chi_square": merge.chi_square,
         "merge_degrees_of_freedom": merge.degrees_of_freedom,
         "merge_p_value": merge.p_value,
@@ -101,13 +110,12 @@ def representative_record(result: ConfigurationResult) -> dict[str, Any]:
 
 def flat_row(record: dict[str, Any]) -> dict[str, Any]:
     """One CSV row from a JSON record: derivatives as NAME and NAME_sigma, poles as
-    pole<i>_real_1_s / pole<i>_imag_1_s, scores as score_<model>, reference as sim_<field>.
+    pole<i>_real_1_s / pole<i>_imag_1_s, scores as score_<model>, mean PCC as mean_pcc_<model>,
+    wins as wins_<model> (total), wins_rms_<model> and wins_pcc_<model>, reference as
+    sim_<field>.
     """
-    row = {
-        key: value
-        for key, value in record.items()
-        if key not in ("derivatives", "poles", "scores", "simulator_reference")
-    }
+    nested = ("derivatives", "poles", "scores", "mean_pcc", "wins", "simulator_reference")
+    row = {key: value for key, value in record.items() if key not in nested}
     for name, estimate in record["derivatives"].items():
         row[name] = estimate["value"]
         row[f"{name}_sigma"] = estimate["sigma"]
@@ -116,6 +124,12 @@ def flat_row(record: dict[str, Any]) -> dict[str, Any]:
         row[f"pole{index}_imag_1_s"] = imag
     for name, score in record["scores"].items():
         row[f"score_{name}"] = score
+    for name, pcc in record["mean_pcc"].items():
+        row[f"mean_pcc_{name}"] = pcc
+    for name, counts in record["wins"].items():
+        row[f"wins_{name}"] = counts["total"]
+        row[f"wins_rms_{name}"] = counts["rms"]
+        row[f"wins_pcc_{name}"] = counts["pcc"]
     reference = record.get("simulator_reference")
     if reference is not None:
         row["sim_damping_ratio"] = reference["damping_ratio"]

@@ -3,17 +3,21 @@
 Pipeline (domain.md section 4), applied to a whole log before cutting so that the filter has no
 edge transients inside a manoeuvre:
 
-1. elevator glitch removal: samples of ``elevator_rad`` that jump by 25 deg or more from the last
-   good sample are dropped and linearly interpolated over time;
+1. elevator glitch removal: samples of ``elevator_rad`` that differ by 25 deg or more from the
+   steady deflection (the median over the manoeuvre's run-in: the study's |delta_e| >= 25 deg,
+   delta_e being the deviation from the steady state; rule ``steady_deviation``, default) or,
+   as an option, from the last good sample (rule ``sample_jump``) are dropped and linearly
+   interpolated over time;
 2. a 4th-order 5 Hz low-pass Butterworth filter run forwards and backwards (zero phase,
    ``scipy.signal.sosfiltfilt``) on the states and the elevator deflection: it keeps the
    time-averaged motion and removes the flapping content (it also rounds the elevator input);
 3. manoeuvres: a doublet starts where ``elevator_cmd`` leaves zero; a manoeuvre starts 0.5 s
    before that and ends at the next rudder input (``rudder_cmd`` leaves zero), or at the log's end.
 
-Each manoeuvre carries its steady state (means of the filtered run-in before the input) and its
-signals as deviations from that steady state, in the log's column names (SI units, body frame of
-docs/frames.md).
+The time column must be a uniform grid up to rounding and jitter (:mod:`sampling`); the
+prepared log's ``time_s`` is that grid. Each manoeuvre carries its steady state (means of the
+filtered run-in before the input) and its signals as deviations from that steady state, in the
+log's column names (SI units, body frame of docs/frames.md).
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ import pandas as pd
 from scipy.signal import butter, sosfiltfilt
 
 from ornitail.core.errors import UserInputError
+from ornitail.flight.sampling import uniform_grid
 
 STATE_COLUMNS = ("q_rad_s", "u_m_s", "w_m_s", "theta_rad")
 ELEVATOR_COLUMN = "elevator_rad"
@@ -33,12 +38,13 @@ REQUIRED_LOG_COLUMNS = ("time_s", *STATE_COLUMNS, "elevator_cmd", ELEVATOR_COLUM
 FREQUENCY_COLUMN = "flapping_frequency_hz"  # optional: steady-state flapping frequency
 
 GLITCH_THRESHOLD_RAD = math.radians(25.0)
+GLITCH_RULES = ("steady_deviation", "sample_jump")
+DEFAULT_GLITCH_RULE = "steady_deviation"
 FILTER_CUTOFF_HZ = 5.0
 FILTER_ORDER = 4
 RUN_IN_S = 0.5
 MINIMUM_RESPONSE_S = 2.0  # from input start to manoeuvre end: doublet (0.66 s) plus >= 1 period
 _COMMAND_ZERO_TOLERANCE = 1e-6
-_SAMPLING_JITTER_TOLERANCE = 0.01  # relative spread of sample intervals accepted as uniform
 
 
 @dataclass(frozen=True)
@@ -80,15 +86,22 @@ class Manoeuvre:
         return float(self.deviations["time_s"].iloc[-1])
 
 
+Window = tuple[float, float, float]  # (start, input, end) of a manoeuvre, s on the log clock
+
+
 @dataclass(frozen=True)
 class PreparedLog:
-    """A flight log after glitch removal and filtering, with its sample rate (Hz)."""
+    """A flight log after glitch removal and filtering, with its sample rate (Hz) and its
+    manoeuvre windows (:func:`find_manoeuvre_windows`). ``time_s`` of ``raw`` and ``filtered``
+    is the log's uniform grid (s).
+    """
 
     name: str
     raw: pd.DataFrame
     filtered: pd.DataFrame
     sample_rate_hz: float
     glitch_mask: np.ndarray  # True where the elevator sample was a glitch (interpolated)
+    windows: tuple[Window, ...]
 
 
 def require_log_columns(log: pd.DataFrame, log_name: str) -> None:
@@ -110,27 +123,37 @@ def require_log_columns(log: pd.DataFrame, log_name: str) -> None:
             )
 
 
-def sample_rate_of(time_s: np.ndarray, log_name: str) -> float:
-    """Sample rate (Hz) of a uniformly sampled, increasing time column (s)."""
-    intervals = np.diff(np.asarray(time_s, dtype=float))
-    if intervals.size < 2 or np.any(intervals <= 0):
-        raise UserInputError(f"{log_name}: column time_s", "time must increase from row to row")
-    typical = float(np.median(intervals))
-    if np.max(np.abs(intervals - typical)) > _SAMPLING_JITTER_TOLERANCE * typical:
-        worst = int(np.argmax(np.abs(intervals - typical)))
-        raise UserInputError(
-            f"{log_name}: column time_s",
-            f"samples are not uniformly spaced (interval {intervals[worst]:.6g} s at "
-            f"t = {time_s[worst]:.3f} s, typical {typical:.6g} s); resample the log first",
-        )
-    return 1.0 / typical
+def steady_elevator_rad(
+    elevator_rad: np.ndarray, start_indices: np.ndarray, input_indices: np.ndarray
+) -> np.ndarray:
+    """The steady elevator deflection (rad) each sample is compared with by the study's rule.
+
+    A manoeuvre's steady deflection is the median raw deflection over its run-in (samples from
+    ``start_indices[k]`` to before ``input_indices[k]``: those whose filtered mean is the
+    manoeuvre's steady state; the median, so that a glitch in the run-in does not move it). It
+    holds from the manoeuvre's start to the next manoeuvre's start; samples before the first
+    manoeuvre use the first one's. A log without manoeuvres uses its overall median.
+    """
+    elevator_rad = np.asarray(elevator_rad, dtype=float)
+    if len(input_indices) == 0:
+        return np.full(elevator_rad.size, float(np.median(elevator_rad)))
+    levels = np.array(
+        [
+            np.median(elevator_rad[start : max(index, start + 1)])
+            for start, index in zip(start_indices, input_indices, strict=True)
+        ]
+    )
+    segment = np.searchsorted(start_indices, np.arange(elevator_rad.size), side="right") - 1
+    return levels[np.maximum(segment, 0)]
 
 
-def elevator_glitch_mask(
+def sample_jump_glitch_mask(
     elevator_rad: np.ndarray, threshold_rad: float = GLITCH_THRESHOLD_RAD
 ) -> np.ndarray:
-    """True for elevator samples (rad) that jump by ``threshold_rad`` or more from the last good
-    sample (so a spike of several samples is marked as a whole and the sample after it is kept).
+    """Rule ``sample_jump``: True for elevator samples (rad) that jump by ``threshold_rad`` or
+    more from the last good sample (so a spike of several samples is marked as a whole and the
+    sample after it is kept). It also marks a true step of the threshold or more within one
+    sample, and every sample after it until the deflection returns.
     """
     elevator_rad = np.asarray(elevator_rad, dtype=float)
     glitch = np.zeros(elevator_rad.size, dtype=bool)
@@ -143,21 +166,51 @@ def elevator_glitch_mask(
     return glitch
 
 
-def remove_elevator_glitches(
-    time_s: np.ndarray,
+def steady_deviation_glitch_mask(
     elevator_rad: np.ndarray,
+    steady_rad: np.ndarray,
     threshold_rad: float = GLITCH_THRESHOLD_RAD,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Replace elevator glitches (:func:`elevator_glitch_mask`) by linear interpolation in time.
+) -> np.ndarray:
+    """Rule ``steady_deviation`` (the study's): True for elevator samples (rad) that differ by
+    ``threshold_rad`` or more from the steady deflection (rad, per sample:
+    :func:`steady_elevator_rad`).
+    """
+    deviation = np.asarray(elevator_rad, dtype=float) - np.asarray(steady_rad, dtype=float)
+    return np.abs(deviation) >= threshold_rad
 
-    Returns the cleaned deflection (rad) and the glitch mask (True where a sample was replaced).
+
+def interpolate_glitches(
+    time_s: np.ndarray, elevator_rad: np.ndarray, glitch: np.ndarray, where: str
+) -> np.ndarray:
+    """The elevator deflection (rad) with the ``glitch`` samples replaced by linear
+    interpolation in time (s) between the good ones.
     """
     elevator_rad = np.asarray(elevator_rad, dtype=float)
-    glitch = elevator_glitch_mask(elevator_rad, threshold_rad)
     if not glitch.any():
-        return elevator_rad.copy(), glitch
+        return elevator_rad.copy()
+    if glitch.all():
+        raise UserInputError(f"{where}: column {ELEVATOR_COLUMN}", "every sample is a glitch")
     time_s = np.asarray(time_s, dtype=float)
-    return np.interp(time_s, time_s[~glitch], elevator_rad[~glitch]), glitch
+    return np.interp(time_s, time_s[~glitch], elevator_rad[~glitch])
+
+
+def elevator_glitch_mask(
+    raw: pd.DataFrame, sample_rate_hz: float, windows: tuple[Window, ...], rule: str
+) -> np.ndarray:
+    """The glitch mask of a log's ``elevator_rad`` under ``rule`` (one of :data:`GLITCH_RULES`);
+    ``windows`` give the manoeuvres whose run-ins define the steady deflection.
+    """
+    elevator = raw[ELEVATOR_COLUMN].to_numpy(dtype=float)
+    if rule == "sample_jump":
+        return sample_jump_glitch_mask(elevator)
+    if rule != "steady_deviation":
+        raise UserInputError("glitch rule", f"{rule!r} is not one of {', '.join(GLITCH_RULES)}")
+    time_s = raw["time_s"].to_numpy(dtype=float)
+    # half a sample below each time, so that rounding cannot move a boundary by one sample
+    half_step_s = 0.5 / sample_rate_hz
+    starts = np.searchsorted(time_s, [start - half_step_s for start, _, _ in windows])
+    inputs = np.searchsorted(time_s, [input_s - half_step_s for _, input_s, _ in windows])
+    return steady_deviation_glitch_mask(elevator, steady_elevator_rad(elevator, starts, inputs))
 
 
 def lowpass_zero_phase(
@@ -185,13 +238,31 @@ def lowpass_zero_phase(
     return sosfiltfilt(sections, signal, axis=0)
 
 
-def prepare_log(log: pd.DataFrame, log_name: str) -> PreparedLog:
-    """Check a flight log, remove elevator glitches and low-pass the states and the elevator."""
+def prepare_log(
+    log: pd.DataFrame,
+    log_name: str,
+    glitch_rule: str = DEFAULT_GLITCH_RULE,
+    run_in_s: float = RUN_IN_S,
+    first_row: int = 1,
+) -> PreparedLog:
+    """Check a flight log, put it on its uniform time grid, find its manoeuvre windows, remove
+    elevator glitches by ``glitch_rule`` and low-pass the states and the elevator.
+
+    ``first_row`` is the row number of the log's first sample in the user's file (for messages).
+    """
     require_log_columns(log, log_name)
     raw = log.reset_index(drop=True).copy()
-    time_s = raw["time_s"].to_numpy(dtype=float)
-    rate = sample_rate_of(time_s, log_name)
-    elevator, glitches = remove_elevator_glitches(time_s, raw[ELEVATOR_COLUMN].to_numpy(float))
+    grid = uniform_grid(
+        raw["time_s"].to_numpy(dtype=float), f"{log_name}: column time_s", first_row
+    )
+    time_s = grid.times_s()
+    raw["time_s"] = time_s
+    rate = grid.rate_hz
+    windows = find_manoeuvre_windows(raw, rate, run_in_s)
+    glitches = elevator_glitch_mask(raw, rate, windows, glitch_rule)
+    elevator = interpolate_glitches(
+        time_s, raw[ELEVATOR_COLUMN].to_numpy(float), glitches, log_name
+    )
     filtered = raw.copy()
     smoothed_columns = [*STATE_COLUMNS, ELEVATOR_COLUMN]
     if FREQUENCY_COLUMN in raw.columns:
@@ -206,7 +277,7 @@ def prepare_log(log: pd.DataFrame, log_name: str) -> PreparedLog:
     smoothed = lowpass_zero_phase(stacked, rate)
     for position, column in enumerate(smoothed_columns):
         filtered[column] = smoothed[:, position]
-    return PreparedLog(log_name, raw, filtered, rate, glitches)
+    return PreparedLog(log_name, raw, filtered, rate, glitches, windows)
 
 
 def _onsets(signal: np.ndarray) -> np.ndarray:
@@ -217,18 +288,18 @@ def _onsets(signal: np.ndarray) -> np.ndarray:
 
 
 def find_manoeuvre_windows(
-    prepared: PreparedLog, run_in_s: float = RUN_IN_S
-) -> list[tuple[float, float, float]]:
-    """(start, input, end) times (s, log clock) of every manoeuvre in a prepared log.
+    log: pd.DataFrame, sample_rate_hz: float, run_in_s: float = RUN_IN_S
+) -> tuple[Window, ...]:
+    """(start, input, end) times (s, log clock) of every manoeuvre in a uniformly sampled log.
 
     Each elevator-command onset opens a manoeuvre; onsets before the previous manoeuvre's end
     belong to it (e.g. a doublet whose command passes through zero). A manoeuvre ends at the next
     rudder onset after its input (exclusive), or one sample after the log's last sample.
     """
-    time_s = prepared.raw["time_s"].to_numpy(float)
-    elevator_onsets = _onsets(prepared.raw["elevator_cmd"].to_numpy(float))
-    rudder_onsets = _onsets(prepared.raw["rudder_cmd"].to_numpy(float))
-    windows: list[tuple[float, float, float]] = []
+    time_s = log["time_s"].to_numpy(float)
+    elevator_onsets = _onsets(log["elevator_cmd"].to_numpy(float))
+    rudder_onsets = _onsets(log["rudder_cmd"].to_numpy(float))
+    windows: list[Window] = []
     for onset in elevator_onsets:
         input_s = float(time_s[onset])
         if windows and input_s < windows[-1][2]:
@@ -237,10 +308,10 @@ def find_manoeuvre_windows(
         end_s = (
             float(time_s[later_turns[0]])
             if later_turns.size
-            else float(time_s[-1]) + 1.0 / prepared.sample_rate_hz
+            else float(time_s[-1]) + 1.0 / sample_rate_hz
         )
         windows.append((input_s - run_in_s, input_s, end_s))
-    return windows
+    return tuple(windows)
 
 
 def cut_manoeuvre(
@@ -253,10 +324,10 @@ def cut_manoeuvre(
 ) -> Manoeuvre:
     """Cut the manoeuvre between ``start_s`` and ``end_s`` (log clock, s) and check it.
 
-    The window is ``start_s <= t < end_s``. Its input is the first elevator-command onset inside
-    it; the window must start at steady flight (command zero), hold ``run_in_s`` before the input
-    and ``minimum_response_s`` after it. A window that breaks this is refused with a
-    :class:`UserInputError` naming the log and the time.
+    The window is ``start_s <= t < end_s``, each bound taken to the nearest sample. Its input is
+    the first elevator-command onset inside it; the window must start at steady flight (command
+    zero), hold ``run_in_s`` before the input and ``minimum_response_s`` after it. A window that
+    breaks this is refused with a :class:`UserInputError` naming the log and the time.
     """
     name = prepared.name
     time_s = prepared.raw["time_s"].to_numpy(float)
@@ -267,7 +338,8 @@ def cut_manoeuvre(
         raise UserInputError(where, f"starts before the log does (log starts at {time_s[0]:.2f} s)")
     if end_s > time_s[-1] + 1.5 / prepared.sample_rate_hz:
         raise UserInputError(where, f"ends after the log does (log ends at {time_s[-1]:.2f} s)")
-    inside = (time_s >= start_s - 1e-9) & (time_s < end_s - 1e-9)
+    half_step_s = 0.5 / prepared.sample_rate_hz  # bounds to the nearest sample of the grid
+    inside = (time_s >= start_s - half_step_s) & (time_s < end_s - half_step_s)
     command = prepared.raw["elevator_cmd"].to_numpy(float)
     onsets = [index for index in _onsets(command) if inside[index]]
     if abs(command[inside][0]) > _COMMAND_ZERO_TOLERANCE:
@@ -317,25 +389,28 @@ def cut_manoeuvres(
     time_range_s: tuple[float, float] | None = None,
     run_in_s: float = RUN_IN_S,
     minimum_response_s: float = MINIMUM_RESPONSE_S,
+    glitch_rule: str = DEFAULT_GLITCH_RULE,
 ) -> list[Manoeuvre]:
     """Prepare a flight log and cut all its manoeuvres (optionally only inside ``time_range_s``).
 
     Every manoeuvre found must pass :func:`cut_manoeuvre`'s checks; otherwise the log is refused
     with the time of the offending input, so nothing is dropped silently.
     """
+    first_row = 1
     if time_range_s is not None:
         require_log_columns(log, log_name)
         first, last = time_range_s
         if not (math.isfinite(first) and math.isfinite(last) and last > first):
             raise UserInputError(f"{log_name}: time_range_s", f"{time_range_s!r} is not a range")
-        log = log[(log["time_s"] >= first) & (log["time_s"] <= last)]
-        if len(log) < 3:
+        kept = ((log["time_s"] >= first) & (log["time_s"] <= last)).to_numpy()
+        if np.count_nonzero(kept) < 3:
             raise UserInputError(f"{log_name}: time_range_s", "holds fewer than 3 samples")
-    prepared = prepare_log(log, log_name)
-    windows = find_manoeuvre_windows(prepared, run_in_s)
-    if not windows:
+        first_row = int(np.argmax(kept)) + 1
+        log = log[kept]
+    prepared = prepare_log(log, log_name, glitch_rule, run_in_s, first_row)
+    if not prepared.windows:
         raise UserInputError(log_name, "no elevator input found (elevator_cmd is zero throughout)")
     return [
         cut_manoeuvre(prepared, start, end, number, run_in_s, minimum_response_s)
-        for number, (start, _, end) in enumerate(windows, start=1)
+        for number, (start, _, end) in enumerate(prepared.windows, start=1)
     ]

@@ -9,8 +9,7 @@ import pandas as pd
 
 from ornitail.core.errors import UserInputError
 from ornitail.flight.model_file import SignalColumn, StateSpaceModelSpec
-
-UNIFORM_SAMPLING_TOLERANCE = 0.01  # largest allowed |dt - median dt| / median dt
+from ornitail.flight.sampling import uniform_grid
 
 
 @dataclass(frozen=True)
@@ -39,7 +38,10 @@ def model_data(spec: StateSpaceModelSpec, data: pd.DataFrame, where: str = "data
     Raises
     ------
     UserInputError
-        Naming every missing column, a column with NaN, too few samples or uneven sampling.
+        Naming every missing column, a column with NaN, too few samples, or a time column
+        that is not a uniform grid up to rounding and jitter (:mod:`sampling`; the row of a
+        missing or doubled sample is named). The samples are treated as uniformly spaced at the
+        grid's interval ``time_step_s`` (s).
     """
     needed = [spec.time_column]
     needed += [column.column for column in spec.columns.values() if column.column is not None]
@@ -58,15 +60,7 @@ def model_data(spec: StateSpaceModelSpec, data: pd.DataFrame, where: str = "data
     if len(data) < max(10, 2 * parameter_count):
         raise UserInputError(where, f"only {len(data)} samples: too few to identify the model")
     time_s = data[spec.time_column].to_numpy(dtype=float) * spec.time_scale
-    steps = np.diff(time_s)
-    time_step_s = float(np.median(steps))
-    if time_step_s <= 0 or np.max(np.abs(steps - time_step_s)) > (
-        UNIFORM_SAMPLING_TOLERANCE * time_step_s
-    ):
-        raise UserInputError(
-            f"{where}: column {spec.time_column}",
-            "time must increase in even steps (resample the log first)",
-        )
+    time_step_s = uniform_grid(time_s, f"{where}: column {spec.time_column}").step_s
 
     def signal(column: SignalColumn) -> np.ndarray:
         if column.constant is not None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import csv
 import json
 import shutil
 import subprocess
@@ -12,7 +13,7 @@ import pytest
 from click.testing import CliRunner
 
 from ornitail.core.errors import UserInputError
-from ornitail.flight.campaign_cli import campaign_command
+from ornitail.flight.campaign_cli import _campaign_from_options, campaign_command
 from ornitail.sim.configuration import study_configuration
 from ornitail.sim.dynamics import linearise
 from ornitail.sim.free_flight import FlightPlan, simulate_flight, write_flight_log_csv
@@ -57,6 +58,43 @@ def test_option_mistakes_are_refused(arguments, message, tmp_path):
     assert message in str(result.exception)
 
 
+@pytest.mark.parametrize(
+    ("option", "value"),
+    [("--selection-rule", "best"), ("--glitch-rule", "jump"), ("--input-hold", "linear")],
+)
+def test_unknown_rules_are_refused_by_the_option_parser(option, value, tmp_path):
+    result = CliRunner().invoke(campaign_command, ["--simulate", "S3@98", option, value])
+    assert result.exit_code == 2 and f"'{value}' is not one of" in result.output
+
+
+def test_rule_options_override_the_campaign_file(tmp_path):
+    campaign = tmp_path / "campaign.toml"
+    campaign.write_text(
+        'glitch_rule = "sample_jump"\ninput_hold = "zero_order"\n'
+        '[[configuration]]\ntail = "S3"\nx_h_mm = 98\nsimulate = 5\n'
+    )
+    no_rules = {"selection_rule": None, "glitch_rule": None, "input_hold": None}
+    from_file = _campaign_from_options(campaign, (), (), 21, None, None, (), (), no_rules)
+    assert (from_file.selection_rule, from_file.glitch_rule, from_file.input_hold) == (
+        "most_wins",
+        "sample_jump",
+        "zero_order",
+    )
+    given = {"selection_rule": "lowest_mean_rms", "glitch_rule": None, "input_hold": "first_order"}
+    overridden = _campaign_from_options(campaign, (), (), 21, None, None, (), (), given)
+    assert (overridden.selection_rule, overridden.glitch_rule, overridden.input_hold) == (
+        "lowest_mean_rms",
+        "sample_jump",
+        "first_order",
+    )
+    simulated = _campaign_from_options(None, (), ("S3@98",), 5, None, None, (), (), given)
+    assert (simulated.selection_rule, simulated.glitch_rule, simulated.input_hold) == (
+        "lowest_mean_rms",
+        "steady_deviation",
+        "first_order",
+    )
+
+
 def test_logs_without_mass_properties_are_refused(s3_log, tmp_path):
     result = CliRunner().invoke(
         campaign_command, ["--log", f"S3@98={s3_log}", "--out", str(tmp_path)]
@@ -83,7 +121,7 @@ def test_campaign_file_run_through_the_console_script(s3_log, tmp_path):
     reference = linearise(study_configuration("S3", 98.0))
     campaign = tmp_path / "campaign.toml"
     campaign.write_text(
-        'seed = 5\n[[configuration]]\ntail = "S3"\nx_h_mm = 98\n'
+        'seed = 5\ninput_hold = "zero_order"\n[[configuration]]\ntail = "S3"\nx_h_mm = 98\n'
         f"mass_kg = {reference.mass_kg!r}\niyy_kg_m2 = {reference.iyy_kg_m2!r}\n"
         f'log = ["{s3_log}"]\n'
     )
@@ -98,6 +136,8 @@ def test_campaign_file_run_through_the_console_script(s3_log, tmp_path):
             "--out",
             str(out),
             "--no-pictures",
+            "--selection-rule",
+            "lowest_mean_rms",
             "--json",
         ],
         capture_output=True,
@@ -110,6 +150,21 @@ def test_campaign_file_run_through_the_console_script(s3_log, tmp_path):
     assert "flight campaign" in completed.stderr  # the progress bar goes to stderr
     (row,) = document["configurations"]
     assert row["configuration"] == "S3@98" and document["seed"] == 5
+    # the file's input hold reached the model; the option's selection rule picked the model
+    assert (row["input_hold"], row["selection_rule"], row["glitch_rule"]) == (
+        "zero_order",
+        "lowest_mean_rms",
+        "steady_deviation",
+    )
+    assert document["selection_rule"] == "lowest_mean_rms"
+    assert row["representative_model"] == min(row["scores"], key=row["scores"].get)
+    # one RMS and one PCC point per validation manoeuvre at least (more only on exact ties)
+    for criterion in ("rms", "pcc"):
+        assert sum(wins[criterion] for wins in row["wins"].values()) >= row["validation"]
+    with (out / "representative_models.csv").open() as handle:
+        (csv_row,) = list(csv.DictReader(handle))
+    assert csv_row["selection_rule"] == "lowest_mean_rms"
+    assert int(csv_row["wins_mean"]) == row["wins"]["mean"]["total"]
     assert row["manoeuvres"] == MANOEUVRES
     # the same bias allowance as the simulated campaign tests (0.03 in damping ratio)
     assert row["damping_ratio"] == pytest.approx(reference.oscillatory_damping_ratio(), abs=0.03)

@@ -84,3 +84,37 @@ def test_labels():
         parse_configuration_label("S3-98", "--simulate")
     with pytest.raises(UserInputError, match=r"unknown tail 'Z9'"):
         configuration_from_label("Z9@98", "--log")
+
+
+def test_campaign_rules_default_to_the_study_and_are_read_from_the_file(tmp_path: Path):
+    path = tmp_path / "campaign.toml"
+    path.write_text(CAMPAIGN)
+    campaign = read_campaign_file(path)
+    assert (campaign.selection_rule, campaign.glitch_rule, campaign.input_hold) == (
+        "most_wins",
+        "steady_deviation",
+        None,
+    )
+    rules = 'selection_rule = "lowest_mean_rms"\nglitch_rule = "sample_jump"\n'
+    path.write_text(rules + 'input_hold = "zero_order"\n' + CAMPAIGN)
+    campaign = read_campaign_file(path)
+    assert (campaign.selection_rule, campaign.glitch_rule, campaign.input_hold) == (
+        "lowest_mean_rms",
+        "sample_jump",
+        "zero_order",
+    )
+
+
+@pytest.mark.parametrize(
+    ("line", "message"),
+    [
+        ('selection_rule = "best"', r"selection_rule: must be one of most_wins, lowest_mean_rms"),
+        ("glitch_rule = 25", r"glitch_rule: must be one of steady_deviation, sample_jump"),
+        ('input_hold = "linear"', r"input_hold: must be one of first_order, zero_order"),
+    ],
+)
+def test_unknown_rules_are_refused(tmp_path: Path, line, message):
+    path = tmp_path / "campaign.toml"
+    path.write_text(line + "\n" + CAMPAIGN)
+    with pytest.raises(UserInputError, match=message):
+        read_campaign_file(path)

@@ -1,4 +1,6 @@
-"""Manoeuvre cutting, elevator glitch removal and the zero-phase filter of flight/manoeuvres.py."""
+"""Manoeuvre cutting, elevator glitch removal (both rules), uniform time grids and the zero-phase
+filter of flight/manoeuvres.py.
+"""
 
 from __future__ import annotations
 
@@ -9,16 +11,20 @@ import pandas as pd
 import pytest
 
 from ornitail.core.errors import UserInputError
+from ornitail.flight.flight_logs import read_flight_log
 from ornitail.flight.manoeuvres import (
     REQUIRED_LOG_COLUMNS,
     cut_manoeuvre,
     cut_manoeuvres,
+    interpolate_glitches,
     lowpass_zero_phase,
     prepare_log,
-    remove_elevator_glitches,
+    sample_jump_glitch_mask,
+    steady_deviation_glitch_mask,
+    steady_elevator_rad,
 )
 from ornitail.sim.configuration import study_configuration
-from ornitail.sim.free_flight import FlightPlan, simulate_flight
+from ornitail.sim.free_flight import FlightPlan, simulate_flight, write_flight_log_csv
 
 PLAN = FlightPlan(duration_s=24.0)  # three 8 s manoeuvre periods, each ending with a turn
 
@@ -70,8 +76,36 @@ def test_cutting_refuses_a_nan_value(simulated_log):
 
 def test_cutting_refuses_unevenly_sampled_time(simulated_log):
     broken = simulated_log.drop(index=range(200, 260)).reset_index(drop=True)
-    with pytest.raises(UserInputError, match=r"time_s.*not uniformly spaced"):
+    with pytest.raises(UserInputError, match=r"time_s: sample\(s\) missing before row 201"):
         cut_manoeuvres(broken, "flight3.csv")
+    # inside a time range, the row is still counted from the top of the file
+    with pytest.raises(UserInputError, match=r"missing before row 201 \(t = 0\.507812"):
+        cut_manoeuvres(broken, "flight3.csv", time_range_s=(0.2, 16.0))
+
+
+def test_a_log_on_a_rounded_clock_of_day_is_cut_like_the_exact_one(simulated_log, tmp_path):
+    """The simulator's CSV (9 significant digits) of a flight stamped from 53603.56 s: times are
+    rounded to 0.1 ms, 5 % of the 512 Hz interval (refused before as uneven), and jittered."""
+    clock_of_day = simulated_log.copy()
+    jitter = np.random.default_rng(4).normal(0.0, 0.05 / 512.0, len(clock_of_day))
+    clock_of_day["time_s"] = clock_of_day["time_s"] + 53603.56 + jitter
+    written = read_flight_log(write_flight_log_csv(clock_of_day, tmp_path / "day.csv"))
+    exact = cut_manoeuvres(simulated_log, "exact.csv")
+    rounded = cut_manoeuvres(written, "day.csv")
+    assert len(rounded) == len(exact)
+    for reference, manoeuvre in zip(exact, rounded, strict=True):
+        # same samples, same grid interval (least-squares slope: its error from 0.1 ms rounding
+        # and 5 % jitter over 12288 samples is ~1e-9 of the interval) and the same run-in
+        assert len(manoeuvre.deviations) == len(reference.deviations)
+        steps = np.diff(manoeuvre.deviations["time_s"])
+        np.testing.assert_allclose(steps, 1 / 512.0, rtol=1e-6)
+        # the grid's start is the least-squares intercept; its standard error at the first
+        # sample is 2 sigma / sqrt(N) = 1.8 us for sigma = 0.098 ms jitter, N = 12288: 10 us
+        assert manoeuvre.log_start_s - 53603.56 == pytest.approx(reference.log_start_s, abs=1e-5)
+        # the signals are the same numbers written with 9 significant digits
+        np.testing.assert_allclose(
+            manoeuvre.deviations["q_rad_s"], reference.deviations["q_rad_s"], atol=1e-7
+        )
 
 
 @pytest.mark.parametrize(
@@ -99,27 +133,60 @@ def test_input_too_close_to_the_log_end_refuses_the_log(simulated_log):
     assert len(cut_manoeuvres(truncated, "short.csv", time_range_s=(0.0, 16.0))) == 2
 
 
-def test_glitches_are_removed_and_interpolated():
+def test_sample_jump_rule_removes_spikes_and_interpolates():
     time = np.arange(2000) / 512.0
     clean = np.radians(10.0) * np.sin(2 * np.pi * 1.5 * time)
     glitched = clean.copy()
     glitched[[300, 301, 302]] += np.radians(40.0)  # a three-sample marker glitch
     glitched[1200] -= np.radians(30.0)
-    cleaned, glitches = remove_elevator_glitches(time, glitched)
+    glitches = sample_jump_glitch_mask(glitched)
     assert np.flatnonzero(glitches).tolist() == [300, 301, 302, 1200]
+    cleaned = interpolate_glitches(time, glitched, glitches, "log.csv")
     # linear interpolation of a smooth signal over <= 3 samples: error <= (h^2/8) max|x''| x few
     max_curvature = np.radians(10.0) * (2 * np.pi * 1.5) ** 2
     bound = (4 / 512.0) ** 2 / 8 * max_curvature
     assert np.max(np.abs(cleaned - clean)) <= bound
-    unchanged, none_found = remove_elevator_glitches(time, clean)
-    assert not none_found.any() and np.array_equal(unchanged, clean)
-
-
-def test_a_jump_just_below_25_degrees_is_kept():
-    time = np.arange(100) / 512.0
+    assert not sample_jump_glitch_mask(clean).any()
     step = np.where(np.arange(100) >= 50, np.radians(24.9), 0.0)
-    cleaned, glitches = remove_elevator_glitches(time, step)
-    assert not glitches.any() and np.array_equal(cleaned, step)
+    assert not sample_jump_glitch_mask(step).any()
+
+
+def _doublet_with_marker_glitch() -> tuple[np.ndarray, np.ndarray]:
+    """Elevator (rad) at 512 Hz: steady at 3 deg, a doublet of +-13 deg about it from sample 256
+    (one-sample switch from + to -, a 26 deg step), and a marker glitch at sample 300 exactly
+    25 deg from steady, 12 deg from its neighbours.
+    """
+    elevator = np.full(1024, 3.0)
+    elevator[256:425] += 13.0
+    elevator[425:594] -= 13.0
+    elevator[300] = 3.0 + 25.0
+    return np.radians(elevator), np.arange(1024) / 512.0
+
+
+def test_steady_deviation_rule_removes_a_glitch_of_exactly_25_degrees():
+    elevator, time = _doublet_with_marker_glitch()
+    steady = steady_elevator_rad(elevator, np.array([0]), np.array([256]))
+    np.testing.assert_array_equal(steady, np.radians(3.0))  # the run-in's median
+    glitches = steady_deviation_glitch_mask(elevator, steady)
+    assert np.flatnonzero(glitches).tolist() == [300]
+    # the old rule sees only a 12 deg jump and keeps the glitch, but cuts the doublet's true
+    # 26 deg switch and every sample of the down pulse after it
+    old = sample_jump_glitch_mask(elevator)
+    assert not old[300] and np.flatnonzero(old).tolist() == list(range(425, 594))
+    cleaned = interpolate_glitches(time, elevator, glitches, "log.csv")
+    # interpolated between its neighbours, both on the up pulse (3 + 13 deg)
+    assert cleaned[300] == pytest.approx(np.radians(16.0), abs=1e-12)
+    below = elevator.copy()
+    below[300] = np.radians(3.0 + 24.9)
+    assert not steady_deviation_glitch_mask(below, steady).any()
+
+
+def test_steady_elevator_follows_each_manoeuvre_run_in():
+    elevator = np.concatenate([np.full(100, 1.0), np.full(100, 2.0), np.full(100, 4.0)])
+    elevator[[10, 11, 12]] = 50.0  # glitches inside the first run-in do not move its median
+    steady = steady_elevator_rad(elevator, np.array([5, 150]), np.array([50, 200]))
+    assert steady[:150].tolist() == [1.0] * 150  # before the first start too
+    assert steady[150:].tolist() == [2.0] * 150  # the second run-in's median, up to the end
 
 
 def test_filter_is_zero_phase_and_removes_flapping_content():
@@ -149,12 +216,15 @@ def test_required_columns_are_the_simulator_log_columns():
     assert set(REQUIRED_LOG_COLUMNS) <= set(LOG_COLUMNS)
 
 
-def test_glitches_in_a_log_are_counted_and_do_not_reach_the_manoeuvre(simulated_log):
+@pytest.mark.parametrize("rule", ["steady_deviation", "sample_jump"])
+def test_glitches_in_a_log_are_counted_and_do_not_reach_the_manoeuvre(simulated_log, rule):
     glitched = simulated_log.copy()
-    rows = [1000, 1001, 5200, 9000]  # two in manoeuvre 1 (t ~ 1.95 s), one in 2, one in 3
+    # two in manoeuvre 1 (t ~ 1.95 s), one in 2 (10.2 s), one in 3 (17.8 s): all after the
+    # doublets (1-1.66 s, 9-9.66 s, 17-17.66 s), where the deflection is back near steady
+    rows = [1000, 1001, 5200, 9100]
     glitched.loc[rows, "elevator_rad"] += np.radians(35.0)
-    clean = cut_manoeuvres(simulated_log, "clean.csv")
-    repaired = cut_manoeuvres(glitched, "glitched.csv")
+    clean = cut_manoeuvres(simulated_log, "clean.csv", glitch_rule=rule)
+    repaired = cut_manoeuvres(glitched, "glitched.csv", glitch_rule=rule)
     assert [m.glitches_removed for m in repaired] == [2, 1, 1]
     for before, after in zip(clean, repaired, strict=True):
         # interpolating over <= 2 samples of a smooth (lagged, 0.02 s) deflection: the filtered

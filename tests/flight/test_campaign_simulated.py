@@ -15,6 +15,7 @@ from ornitail.flight.campaign import run_campaign
 from ornitail.flight.campaign_file import CampaignSpec, configuration_from_label
 from ornitail.flight.campaign_plots import write_campaign_pictures
 from ornitail.flight.campaign_table import write_campaign_table
+from ornitail.flight.validation import select_representative
 from ornitail.sim.configuration import study_configuration
 from ornitail.sim.dynamics import linearise
 
@@ -103,7 +104,13 @@ def test_bookkeeping_of_manoeuvres(campaign_results):
         assert result.accepted.size == len(result.models) - result.rejected_count
         assert set(result.training) | set(result.validation) == set(result.accepted)
         assert not set(result.training) & set(result.validation)
-        assert result.representative.name == min(result.scores, key=result.scores.get)
+        # the study's rule by default: most wins by RMS and PCC over the validation manoeuvres
+        assert result.selection_rule == "most_wins"
+        scores = result.validation_scores
+        assert scores.rms.shape == (3, result.validation.size)
+        assert result.representative.name == select_representative(scores, "most_wins")
+        points = {name: sum(wins.values()) for name, wins in scores.wins().items()}
+        assert points[result.representative.name] == max(points.values())
         assert {model.name for model in result.averaged} == {"mean", "weighted", "time_averaged"}
 
 
@@ -119,6 +126,13 @@ def test_table_and_pictures_are_written(campaign_results, tmp_path):
         assert float(row["Mq_sigma"]) > 0
         assert float(row["damping_ratio"]) == pytest.approx(_oscillatory(result).damping_ratio)
         assert row["representative_model"] in ("mean", "weighted", "time_averaged")
+        assert row["selection_rule"] == "most_wins"
+        assert row["glitch_rule"] == "steady_deviation" and row["input_hold"] == "first_order"
+        wins = result.validation_scores.wins()
+        for name in ("mean", "weighted", "time_averaged"):
+            assert int(row[f"wins_rms_{name}"]) == wins[name]["rms"]
+            assert int(row[f"wins_{name}"]) == wins[name]["rms"] + wins[name]["pcc"]
+            assert float(row[f"mean_pcc_{name}"]) <= 1.0
         assert int(row["rejected"]) == result.rejected_count
         poles = [
             complex(float(row[f"pole{i}_real_1_s"]), float(row[f"pole{i}_imag_1_s"]))

@@ -1,15 +1,21 @@
-"""Validation errors, rejection flags and the 70/30 split of flight/validation.py."""
+"""Validation errors, rejection flags, the 70/30 split and the choice of the representative model
+(flight/validation.py).
+"""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pytest
 
 from ornitail.core.errors import UserInputError
 from ornitail.flight.validation import (
+    ValidationScores,
     normalised_rms,
     rejection_flags,
     response_errors,
+    select_representative,
     split_training_validation,
 )
 
@@ -87,3 +93,70 @@ def test_normalised_rms_is_scale_free():
     expected = np.mean(0.2 * np.sqrt(np.mean(measured**2, axis=0)) / np.std(measured, axis=0))
     assert normalised_rms(measured, simulated) == pytest.approx(expected, rel=1e-12)
     assert normalised_rms(measured * [1, 1e3], simulated * [1, 1e3]) == pytest.approx(expected)
+
+
+def test_an_rms_exactly_at_the_80th_percentile_is_flagged():
+    # six models: numpy's (linear) 80th percentile of 1..6 is at position 0.8 * 5 = 4, exactly
+    # the fifth value; the study's "top 20 %" flags it (RMS >= percentile), the old rule did not
+    rms = np.tile(np.arange(1.0, 7.0)[:, None], (1, 4))
+    flags = rejection_flags(rms, np.full((6, 4), 0.9), np.full((6, 8), 0.2))
+    assert np.quantile(rms[:, 0], 0.8) == 5.0
+    np.testing.assert_array_equal(flags.rms, [0, 0, 0, 0, 1, 1])
+
+
+NAMES = ("mean", "weighted", "time_averaged")
+
+
+def _scores(rms: list[list[float]], pcc: list[list[float]]) -> ValidationScores:
+    return ValidationScores(NAMES, np.array(rms), np.array(pcc))
+
+
+def test_most_wins_and_lowest_mean_rms_can_disagree():
+    # four validation manoeuvres. "weighted" is best on three by RMS and PCC (6 wins) but fails
+    # badly on the fourth, so its mean RMS (0.50) is above "time_averaged"'s (0.35)
+    scores = _scores(
+        rms=[[0.40, 0.40, 0.40, 0.60], [0.20, 0.20, 0.20, 1.40], [0.30, 0.30, 0.30, 0.50]],
+        pcc=[[0.80, 0.80, 0.80, 0.80], [0.95, 0.95, 0.95, 0.10], [0.90, 0.90, 0.90, 0.85]],
+    )
+    assert scores.wins() == {
+        "mean": {"rms": 0, "pcc": 0},
+        "weighted": {"rms": 3, "pcc": 3},
+        "time_averaged": {"rms": 1, "pcc": 1},
+    }
+    mean_rms = {"mean": 0.45, "weighted": 0.50, "time_averaged": 0.35}
+    assert scores.mean_rms() == pytest.approx(mean_rms, rel=1e-12)  # sums of 4 decimals
+    assert select_representative(scores) == "weighted"
+    assert select_representative(scores, "most_wins") == "weighted"
+    assert select_representative(scores, "lowest_mean_rms") == "time_averaged"
+
+
+def test_rms_and_pcc_wins_are_counted_separately_and_ties_go_to_the_lower_mean_rms():
+    # "mean" wins both manoeuvres by RMS, "time_averaged" both by PCC: 2 points each; the tie
+    # goes to the lower mean RMS ("mean", 0.25 against 0.35)
+    scores = _scores(
+        rms=[[0.2, 0.3], [0.5, 0.5], [0.3, 0.4]],
+        pcc=[[0.8, 0.8], [0.7, 0.7], [0.9, 0.9]],
+    )
+    assert scores.wins()["mean"] == {"rms": 2, "pcc": 0}
+    assert scores.wins()["time_averaged"] == {"rms": 0, "pcc": 2}
+    assert select_representative(scores) == "mean"
+    # equal points and equal mean RMS: the candidates' order decides (mean before weighted)
+    level = _scores(rms=[[0.2, 0.4], [0.4, 0.2], [0.5, 0.5]], pcc=[[0.5, 0.9], [0.9, 0.5], [0, 0]])
+    assert select_representative(level) == "mean"
+
+
+def test_exact_ties_for_best_each_win_and_unsimulable_models_take_no_part():
+    scores = _scores(
+        rms=[[0.2, 0.2], [0.2, math.inf], [0.3, 0.3]],
+        pcc=[[0.9, 0.9], [0.9, math.nan], [0.8, 0.8]],
+    )
+    assert scores.eligible().tolist() == [True, False, True]
+    assert scores.wins()["mean"] == {"rms": 2, "pcc": 2}
+    assert scores.wins()["weighted"] == {"rms": 0, "pcc": 0}
+    tie = _scores(rms=[[0.2], [0.2], [0.3]], pcc=[[0.9], [0.9], [0.8]])
+    assert tie.wins()["mean"] == tie.wins()["weighted"] == {"rms": 1, "pcc": 1}
+    nothing = _scores(rms=[[math.nan]] * 3, pcc=[[0.5]] * 3)
+    with pytest.raises(UserInputError, match="S3@98: no averaged model could be simulated"):
+        select_representative(nothing, where="S3@98")
+    with pytest.raises(UserInputError, match="'best_pcc' is not one of"):
+        select_representative(scores, "best_pcc")
