@@ -84,7 +84,8 @@ class OutputErrorProblem:
         """Simulated outputs (N, outputs) at theta."""
         parameters, initial_state = self.split(theta)
         discrete = discretise(self.spec, parameters, self.constants, self.signals.time_step_s)
-        outputs, _ = simulate_outputs(discrete, initial_state, self.signals.inputs)
+        with np.errstate(invalid="ignore", over="ignore"):
+            outputs, _ = simulate_outputs(discrete, initial_state, self.signals.inputs)
         return self._unless_unbounded(outputs)
 
     def _unless_unbounded(self, outputs: np.ndarray) -> np.ndarray:

@@ -127,7 +127,8 @@ def morelli_colored_covariance(
     channels' residual correlation matrix at lag l over *all* lags 0..N-1, unbiased (divided by
     N - l) as ``m_colores`` gets it from ``xcorrs``; R(l)[a, b] = sum_k v_a[k+l] v_b[k]/(N - l),
     used for both signs of j - i as SIDPAC does. The double sum is a Toeplitz product, formed for
-    each channel pair by one FFT convolution.
+    each channel pair by one FFT convolution. The result is raised to at least the Cramer-Rao
+    bound in every direction (:func:`at_least_cramer_rao`), which makes it positive definite.
 
     Parameters
     ----------
@@ -152,7 +153,37 @@ def morelli_colored_covariance(
     middle = np.einsum("kap,kaq->pq", weighted_sensitivities, filtered)
     inverse = np.linalg.pinv(information)
     covariance = inverse @ middle @ inverse
-    return 0.5 * (covariance + covariance.T)
+    return at_least_cramer_rao(0.5 * (covariance + covariance.T), information)
+
+
+def at_least_cramer_rao(covariance: np.ndarray, information: np.ndarray) -> np.ndarray:
+    """``covariance`` raised, in every direction, to at least the Cramer-Rao bound M^-1.
+
+    In coordinates where M^-1 is the identity (z = L^T theta, M = L L^T) the covariance's
+    eigenvalues below 1 are set to 1. The unbiased full-lag correlation of
+    :func:`morelli_colored_covariance` does not give a positive semi-definite bracket: on the Twin
+    Otter record the colored covariance has a correlation-scale eigenvalue of -0.19, and on short
+    simulated manoeuvres most of them are indefinite, a few with negative variances. Where the
+    correction inflates the bound (real data: 3-5x) nothing changes; in the directions where it
+    would shrink it below the white-noise bound (an artefact of estimating the correlation from
+    one short record) the bound is kept. The result is a positive definite covariance that a
+    weighted mean, a merge test or the delta method can use; on the Twin Otter record it moves
+    the derivatives' sigmas by at most 2.5 %.
+    """
+    if not (np.all(np.isfinite(covariance)) and np.all(np.isfinite(information))):
+        return covariance
+    try:
+        factor = np.linalg.cholesky(0.5 * (information + information.T))
+    except np.linalg.LinAlgError:
+        return covariance
+    whitened = factor.T @ covariance @ factor
+    values, vectors = np.linalg.eigh(0.5 * (whitened + whitened.T))
+    if values.min() >= 1.0:
+        return covariance
+    raised = (vectors * np.maximum(values, 1.0)) @ vectors.T
+    inverse_factor = np.linalg.inv(factor)
+    result = inverse_factor.T @ raised @ inverse_factor
+    return 0.5 * (result + result.T)
 
 
 def tapered_colored_covariance(
