@@ -3,7 +3,8 @@
 The full specification, with byte tables and a worked example, is ``docs/daq-protocol.md``. In
 short: a 25-byte little-endian frame per sample — sync word ``A5 5A``, uint32 sample counter, eight
 int16 ADC channels (six Nano-17 gauges, hot-wire bridge, thermocouple), a status byte (bit 0 = Hall
-line) and a CRC-16/CCITT-FALSE (LE) over bytes 2..22. Commands are ASCII lines. This module holds no
+line, bit 1 = over-range: some channel's input was outside the ADC range) and a CRC-16/CCITT-FALSE (LE)
+over bytes 2..22. Commands are ASCII lines. This module holds no
 I/O: the encoder is used by the simulated board and the tests, the parser by the driver.
 """
 
@@ -31,6 +32,9 @@ CHANNEL_NAMES = (
 )
 STATUS_BIT_HALL = 0x01
 STATUS_BIT_OVERRANGE = 0x02
+ADC_COUNT_MIN = -32768
+ADC_COUNT_MAX = 32767
+"""A channel reading either limit is clipped: its input was at or beyond the ADC range."""
 ADC_RANGE_V = 10.24
 VOLTS_PER_COUNT = ADC_RANGE_V / 32768.0  # 0.3125 mV per count, int16 covers -10.24 .. +10.2397 V
 DEFAULT_BAUD = 4_000_000
@@ -90,7 +94,10 @@ class StreamStatistics:
     next valid frame. garbage_bytes : bytes that were not part of any valid frame (includes the
     bytes of the two above). counter_gaps : places where the counter jumped forward by more than
     one. lost_samples : sum of the jumps minus one, i.e. the number of samples that never arrived.
-    counter_resets : places where the counter went backwards (board restarted).
+    counter_resets : places where the counter went backwards (board restarted). resyncs : stretches of
+    garbage bytes (each one made the parser search for the next frame; a run of garbage cut by a buffer
+    boundary counts once). saturated_frames : valid frames with the over-range status bit set or an analog
+    channel at -32768 or +32767 counts.
     """
 
     frames_ok: int = 0
@@ -100,6 +107,8 @@ class StreamStatistics:
     counter_gaps: int = 0
     lost_samples: int = 0
     counter_resets: int = 0
+    resyncs: int = 0
+    saturated_frames: int = 0
     last_counter: int | None = field(default=None, repr=False)
 
 
@@ -115,11 +124,13 @@ class DaqFrameParser:
 
     def __init__(self) -> None:
         self._pending = b""
+        self._in_garbage = False  # the last decided bytes were garbage (a stretch may go on)
         self.statistics = StreamStatistics()
 
     def reset(self) -> None:
         """Forget the undecided tail and the counter history (the totals are kept)."""
         self._pending = b""
+        self._in_garbage = False
         self.statistics.last_counter = None
 
     def feed(self, data: bytes, *, final: bool = False) -> DecodedFrames:
@@ -132,7 +143,10 @@ class DaqFrameParser:
         n = buffer.shape[0]
         if n < 2:
             self._pending = b"" if final else buffer_bytes
-            self.statistics.garbage_bytes += n if final else 0
+            if final and n:
+                self.statistics.garbage_bytes += n
+                self.statistics.resyncs += 0 if self._in_garbage else 1
+                self._in_garbage = True
             return _empty_frames()
         candidates = np.flatnonzero((buffer[:-1] == 0xA5) & (buffer[1:] == 0x5A))
         complete = candidates[candidates + FRAME_LENGTH_BYTES <= n]
@@ -169,9 +183,14 @@ class DaqFrameParser:
         decided_rejected = rejected[rejected < undecided_start]
         next_accepted = np.searchsorted(accepted_positions, decided_rejected, side="right")
         has_next = next_accepted < accepted_positions.size
-        next_start = np.where(
-            has_next, accepted_positions[np.minimum(next_accepted, accepted_positions.size - 1)], n
-        )
+        if accepted_positions.size:
+            next_start = np.where(
+                has_next,
+                accepted_positions[np.minimum(next_accepted, accepted_positions.size - 1)],
+                n,
+            )
+        else:  # a bad frame decided in a buffer without a valid one (garbage cut by buffer ends)
+            next_start = np.full(decided_rejected.shape, n)
         overlaps_next = has_next & (decided_rejected + FRAME_LENGTH_BYTES > next_start)
         if final:
             truncated_at_end = candidates[
@@ -185,6 +204,7 @@ class DaqFrameParser:
         statistics.garbage_bytes += undecided_start - FRAME_LENGTH_BYTES * int(
             accepted_positions.size
         )
+        self._count_garbage_stretches(accepted_positions, undecided_start)
         self._pending = buffer_bytes[undecided_start:]
 
         frames = windows[accepted_rows]
@@ -195,7 +215,25 @@ class DaqFrameParser:
         )
         self._account_counters(decoded.counters)
         statistics.frames_ok += len(decoded)
+        statistics.saturated_frames += int(np.count_nonzero(saturated_rows(decoded)))
         return decoded
+
+    def _count_garbage_stretches(self, accepted_positions: np.ndarray, decided_end: int) -> None:
+        """Count the stretches of garbage among the bytes decided in this call (``[0, decided_end)``)."""
+        frame_ends = accepted_positions + FRAME_LENGTH_BYTES
+        previous_ends = np.concatenate(([0], frame_ends[:-1]))
+        # garbage bytes before each accepted frame, and after the last one
+        before_frames = accepted_positions - previous_ends
+        after_last = decided_end - (int(frame_ends[-1]) if frame_ends.size else 0)
+        stretches = int(np.count_nonzero(before_frames)) + int(after_last > 0)
+        first_stretch_at_start = (before_frames[0] > 0) if before_frames.size else after_last > 0
+        if self._in_garbage and first_stretch_at_start:
+            stretches -= 1  # the stretch began in an earlier call
+        self.statistics.resyncs += stretches
+        if after_last > 0:
+            self._in_garbage = True
+        elif frame_ends.size:
+            self._in_garbage = False
 
     def _account_counters(self, counters: np.ndarray) -> None:
         if counters.size == 0:
@@ -211,6 +249,13 @@ class DaqFrameParser:
         statistics.lost_samples += int(np.sum(steps[forward_gaps] - 1))
         statistics.counter_resets += int(np.count_nonzero(backwards | (steps == 0)))
         statistics.last_counter = int(counters[-1])
+
+
+def saturated_rows(decoded: DecodedFrames) -> np.ndarray:
+    """(n,) bool: frames whose board set the over-range status bit or with an analog channel at
+    ``ADC_COUNT_MIN`` or ``ADC_COUNT_MAX`` (a clipped reading cannot be told from one exactly at the limit)."""
+    at_limit = (decoded.counts == ADC_COUNT_MIN) | (decoded.counts == ADC_COUNT_MAX)
+    return ((decoded.status & STATUS_BIT_OVERRANGE) != 0) | np.any(at_limit, axis=1)
 
 
 def _empty_frames() -> DecodedFrames:

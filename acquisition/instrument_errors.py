@@ -24,3 +24,7 @@ class InstrumentDisconnected(InstrumentError):
 
 class InstrumentReplyError(InstrumentError):
     """The instrument answered ``ERR ...`` or a reply the protocol does not allow."""
+
+
+class InstrumentInUse(InstrumentError):
+    """Another process (or another connection in this one) holds the instrument's port or bus."""

@@ -4,20 +4,34 @@ Each command is one line (``RPM 1200\\n``); each reply is one line: ``OK``, a va
 (``RPM 1187.3``) or ``ERR <reason>``. The connection is locked so that a GUI and a sweep can share
 one instrument. Port failures and silence raise :class:`InstrumentDisconnected`, ``ERR`` replies
 :class:`InstrumentReplyError`, both naming the instrument.
+
+The port is opened exclusively (a lock file naming the holder and pyserial's ``exclusive=True``; another
+process gets :class:`InstrumentInUse`), then a newline ends any command a crashed host left half-written and
+whatever the instrument still sends (a late reply) is drained before the first command.
 """
 
 from __future__ import annotations
 
-import contextlib
 import termios
 import threading
 import time
 
 import serial
 
+from ornitail.acquisition.exclusive_locks import ExclusiveLock
 from ornitail.acquisition.instrument_errors import InstrumentDisconnected, InstrumentReplyError
+from ornitail.acquisition.serial_port_access import (
+    close_quietly,
+    drain_until_quiet,
+    open_serial_exclusively,
+    printable_excerpt,
+)
 
 DEFAULT_LINE_BAUD = 115_200
+OPEN_QUIET_S = 0.1
+"""On open, the line must stay quiet this long before the first command, s."""
+OPEN_DRAIN_LIMIT_S = 2.0
+"""On open, give up draining (the instrument keeps talking) after this long, s."""
 
 
 class LineInstrumentConnection:
@@ -43,22 +57,42 @@ class LineInstrumentConnection:
         self.baud = baud
         self.reply_timeout_s = reply_timeout_s
         self._serial: serial.Serial | None = None
+        self._port_lock: ExclusiveLock | None = None
         self._lock = threading.Lock()
 
     def open(self) -> None:
-        """Open the port (raises InstrumentDisconnected if it cannot)."""
+        """Open the port exclusively and drain it (InstrumentInUse, InstrumentDisconnected if it cannot)."""
+        self._serial, self._port_lock = open_serial_exclusively(self.port, self.baud, self.name)
         try:
-            self._serial = serial.Serial(self.port, self.baud, timeout=0.05, write_timeout=1.0)
-            self._serial.reset_input_buffer()
-        except (OSError, ValueError) as error:
-            raise InstrumentDisconnected(self.name, f"cannot open {self.port}: {error}") from None
+            self.discard_pending_input()
+        except BaseException:
+            self.close()
+            raise
+
+    def discard_pending_input(self) -> int:
+        """End a half-written command line, drain until quiet (bounded); return the bytes discarded."""
+        port = self._serial
+        if port is None:
+            raise InstrumentDisconnected(self.name, f"port {self.port} is not open")
+        try:
+            port.write(b"\n")
+            drained = drain_until_quiet(port, quiet_s=OPEN_QUIET_S, limit_s=OPEN_DRAIN_LIMIT_S)
+            port.reset_input_buffer()
+        except (OSError, termios.error) as error:
+            raise InstrumentDisconnected(self.name, f"port {self.port} failed: {error}") from None
+        if not drained.quiet:
+            raise InstrumentDisconnected(
+                self.name,
+                f"port {self.port} kept sending data for {OPEN_DRAIN_LIMIT_S:g} s "
+                f"({drained.bytes_discarded} bytes) instead of waiting for a command",
+            )
+        return drained.bytes_discarded
 
     def close(self) -> None:
-        """Close the port; safe to call twice."""
-        if self._serial is not None:
-            with contextlib.suppress(OSError):
-                self._serial.close()
-            self._serial = None
+        """Close the port and release its lock; safe to call twice."""
+        serial_port, self._serial = self._serial, None
+        port_lock, self._port_lock = self._port_lock, None
+        close_quietly(serial_port, port_lock)
 
     @property
     def is_open(self) -> bool:
@@ -98,14 +132,19 @@ class LineInstrumentConnection:
             )
         text = reply.decode("ascii", errors="replace").strip()
         if text.startswith("ERR"):
-            raise InstrumentReplyError(self.name, f"refused {command!r}: {text[3:].strip()}")
+            raise InstrumentReplyError(
+                self.name,
+                f"refused {command!r}: {printable_excerpt(text[3:].strip(), quote=False)}",
+            )
         return text
 
     def command(self, command: str) -> None:
         """Send a set command and require the reply ``OK``."""
         reply = self.query(command)
         if reply != "OK":
-            raise InstrumentReplyError(self.name, f"expected OK to {command!r}, got {reply!r}")
+            raise InstrumentReplyError(
+                self.name, f"expected OK to {command!r}, got {printable_excerpt(reply)}"
+            )
 
     def query_value(self, command: str, keyword: str) -> float:
         """Send a query such as ``RPM?`` and return the number of the reply ``RPM <value>``."""
@@ -117,5 +156,6 @@ class LineInstrumentConnection:
             return float(words[1])
         except ValueError:
             raise InstrumentReplyError(
-                self.name, f"expected '{keyword} <number>' to {command!r}, got {reply!r}"
+                self.name,
+                f"expected '{keyword} <number>' to {command!r}, got {printable_excerpt(reply)}",
             ) from None

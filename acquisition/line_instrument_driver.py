@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+from ornitail.acquisition.instrument_errors import InstrumentReplyError
 from ornitail.acquisition.line_instrument_connection import (
     DEFAULT_LINE_BAUD,
     LineInstrumentConnection,
 )
+from ornitail.acquisition.serial_port_access import printable_excerpt
 
 
 class LineInstrumentDriver:
@@ -31,9 +33,26 @@ class LineInstrumentDriver:
         self._safe_state_command = safe_state_command
 
     def open(self) -> str:
-        """Open the port and return the controller's ``ID?`` reply."""
+        """Open the port exclusively, drain what is pending, and return the controller's ``ID?`` reply.
+
+        A reply that is not ``ID ...`` (a late answer to a crashed host's command) is drained and asked again
+        once; the port is closed again if the instrument cannot be identified.
+        """
         self.connection.open()
-        return self.connection.query("ID?")
+        try:
+            reply = self.connection.query("ID?")
+            if not reply.startswith("ID"):
+                self.connection.discard_pending_input()
+                reply = self.connection.query("ID?")
+            if not reply.startswith("ID"):
+                raise InstrumentReplyError(
+                    self.name,
+                    f"unexpected reply to 'ID?' on {self.connection.port}: {printable_excerpt(reply)}",
+                )
+        except BaseException:
+            self.connection.close()
+            raise
+        return reply
 
     def close(self) -> None:
         """Close the port (does not bring the instrument to rest; call :meth:`safe_state` first)."""

@@ -7,8 +7,10 @@ a set point's rows are chosen by when the board *took* them (:meth:`LiveBalance.
 when they reached the host, and a record with counter gaps is recognised (:meth:`LiveBalance.samples_missing_in_rows`).
 :meth:`LiveBalance.measure` averages the next ``record_s`` of full-rate rows (a wind-off tare) and, while
 recording, names the rows it used, so a manual tare or measurement becomes a set point of the run exactly as a
-sweep's would. Link health (CRC failures, lost samples, writer-queue losses) and ADC clipping are counted here for
-a status display.
+sweep's would. Every row is flagged for the recorder: saturated (the board's over-range status bit, or an analog
+channel at its ADC limit) and over the sensor's rated load (the calibration file's ``max`` per axis, from the raw
+gauge volts); the recorder counts them per set point. Link health (CRC failures, garbage bytes and resyncs, lost
+samples) and clipping are counted here for a status display.
 """
 
 from __future__ import annotations
@@ -22,7 +24,12 @@ import numpy as np
 from ornitail.acquisition.counter_gaps import CounterGap, find_counter_gaps
 from ornitail.acquisition.daq_protocol import ANALOG_CHANNEL_COUNT, CHANNEL_NAMES
 from ornitail.acquisition.recorder import DisplayFeed, Recorder
-from ornitail.acquisition.recording_layout import ChannelSpec, StreamLayout
+from ornitail.acquisition.recording_layout import (
+    ROW_FLAG_OVER_RATED_RANGE,
+    ROW_FLAG_SATURATED,
+    ChannelSpec,
+    StreamLayout,
+)
 from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
 from ornitail.core.errors import UserInputError
@@ -36,7 +43,13 @@ second: many seconds of backlog). Gaps are remembered for the whole recording.""
 @dataclass(frozen=True)
 class LinkHealth:
     """Counts since the stream started: CRC failures, samples lost on the link, blocks the driver dropped,
-    samples the recorder's writer queue dropped, and clipped samples per analog channel (``CHANNEL_NAMES[:8]``).
+    samples the recorder's writer queue dropped, clipped samples per analog channel (``CHANNEL_NAMES[:8]``),
+    bytes outside valid frames and the stretches of them (resyncs), and rows flagged saturated or over the
+    sensor's rated load.
+
+    ``recording_lost_samples`` is the one count of lost samples of the current (or last) recording,
+    ``recording_run_id``: the samples its counters say are missing in its file, which is what ``ornitail runs``
+    and the sweep report show for that run (link, driver-queue and recorder-queue losses each counted once).
     """
 
     crc_errors: int
@@ -44,6 +57,12 @@ class LinkHealth:
     driver_dropped_blocks: int
     recorder_lost_samples: int
     clipped_samples: tuple[int, ...]
+    garbage_bytes: int = 0
+    resyncs: int = 0
+    saturated_samples: int = 0
+    over_range_samples: int = 0
+    recording_run_id: str | None = None
+    recording_lost_samples: int = 0
 
     @property
     def saturated_channels(self) -> list[str]:
@@ -135,11 +154,18 @@ class LiveBalance:
         self._recorder: Recorder | None = None
         self._measurement: _Measurement | None = None
         self._lock = threading.Lock()
+        self._report_lock = threading.Lock()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._rows_seen = 0
-        self._reported = (0, 0)
+        self._reported = (0, 0, 0, 0)  # crc, lost, garbage bytes, resyncs already reported
         self._recorder_lost_before = 0
+        self._last_recorder: Recorder | None = None
+        self._saturated_samples = 0
+        self._over_range_samples = 0
+        calibration = rig.calibration
+        self._gauge_volts_to_load = np.asarray(calibration.sensor_matrix_si, dtype=float)
+        self._rated_load = np.asarray(calibration.ranges_si, dtype=float)
         self._clipped = np.zeros(ANALOG_CHANNEL_COUNT, dtype=np.int64)
         self._clip_low_v = self._clip_high_v = np.zeros(ANALOG_CHANNEL_COUNT)
         self._first_counter: int | None = None
@@ -148,6 +174,7 @@ class LiveBalance:
             CounterGap
         ] = []  # in the attached recorder's rows, however long ago
         self._last_recorded_counter: int | None = None
+        self._last_counter_delivered: int | None = None  # recorded or not
 
     # -- stream -----------------------------------------------------------------------------
     def start(self, sample_rate_hz: float | None = None) -> None:
@@ -185,13 +212,40 @@ class LiveBalance:
                 block = self.driver.get_block(timeout_s=GET_BLOCK_TIMEOUT_S)
                 if block is None:
                     continue
-                self._deliver(block.counters, block.volts)
+                self._deliver(block.counters, block.volts, block.saturated)
         except BaseException as error:  # reported by health(); the display shows it
             self.error = error
 
-    def _deliver(self, counters: np.ndarray, volts: np.ndarray) -> None:
+    def row_flags(
+        self,
+        volts: np.ndarray,
+        saturated: np.ndarray | None,
+        clipped: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """(n,) uint8 flags of rows: ``ROW_FLAG_SATURATED`` from the board's status (or, without it, a channel
+        at its ADC limit; ``clipped``: (n, 8) bool, if already known) and ``ROW_FLAG_OVER_RATED_RANGE`` where a
+        sensor-frame load from the raw gauge volts exceeds the calibration's rated load (no bias removed: the
+        gauges' zero offsets, typically under 0.1 V, shift the check by a few percent of the rating)."""
+        if saturated is None:
+            if clipped is None:
+                analog = volts[:, :ANALOG_CHANNEL_COUNT]
+                clipped = (analog <= self._clip_low_v) | (analog >= self._clip_high_v)
+            saturated = clipped.any(axis=1)
+        loads = volts[:, :6] @ self._gauge_volts_to_load.T
+        over_range = (np.abs(loads) > self._rated_load).any(axis=1)
+        flags = saturated.astype(np.uint8) * np.uint8(ROW_FLAG_SATURATED)
+        flags |= over_range.astype(np.uint8) * np.uint8(ROW_FLAG_OVER_RATED_RANGE)
+        return flags
+
+    def _deliver(
+        self, counters: np.ndarray, volts: np.ndarray, saturated: np.ndarray | None = None
+    ) -> None:
         analog = volts[:, :ANALOG_CHANNEL_COUNT]
-        self._clipped += ((analog <= self._clip_low_v) | (analog >= self._clip_high_v)).sum(axis=0)
+        clipped = (analog <= self._clip_low_v) | (analog >= self._clip_high_v)
+        self._clipped += clipped.sum(axis=0)
+        flags = self.row_flags(volts, saturated, clipped)
+        self._saturated_samples += int(np.count_nonzero(flags & ROW_FLAG_SATURATED))
+        self._over_range_samples += int(np.count_nonzero(flags & ROW_FLAG_OVER_RATED_RANGE))
         with self._lock:
             recorder, measurement = self._recorder, self._measurement
         if self._first_counter is None:
@@ -199,7 +253,9 @@ class LiveBalance:
         first_row: int | None = None
         if recorder is not None:
             first_row = recorder.next_sample_index
-            if recorder.put_block(counters, volts):
+            if recorder.put_block(counters, volts, flags):
+                if self._last_recorded_counter is None:
+                    self._exclude_loss_before_first_row(int(counters[0]))
                 gaps = find_counter_gaps(counters, self._last_recorded_counter, first_row)
                 with self._lock:
                     self._recent_rows.append((first_row, counters))
@@ -212,23 +268,49 @@ class LiveBalance:
             measurement.add(counters, volts, first_row)
         self.display_feed.offer(counters, volts, self._rows_seen)
         self._rows_seen += len(counters)
+        self._last_counter_delivered = int(counters[-1])
+
+    def _exclude_loss_before_first_row(self, first_counter: int) -> None:
+        """Samples lost just before a recording's first row are not the recording's (its file cannot show them):
+        keep them out of the link losses reported to it, so its link losses stay part of its lost samples."""
+        if self._last_counter_delivered is None:
+            return
+        gaps = find_counter_gaps(
+            np.array([first_counter], dtype=np.uint32), self._last_counter_delivered
+        )
+        leading = sum(gap.missing_samples for gap in gaps)
+        if leading:
+            with self._report_lock:
+                crc, lost, garbage, resyncs = self._reported
+                newly_lost = self.driver.statistics.lost_samples - lost
+                self._reported = (crc, lost + min(leading, max(0, newly_lost)), garbage, resyncs)
 
     def _report_link_health(self, recorder: Recorder) -> None:
+        with self._report_lock:  # the pump and detach() both report; each increment exactly once
+            counts = self._link_counts()
+            if counts != self._reported:
+                crc, lost, garbage, resyncs = (
+                    max(0, now - before) for now, before in zip(counts, self._reported, strict=True)
+                )
+                recorder.report_link_health(
+                    crc_errors=crc, lost_samples=lost, garbage_bytes=garbage, resyncs=resyncs
+                )
+                self._reported = counts
+
+    def _link_counts(self) -> tuple[int, int, int, int]:
         statistics = self.driver.statistics
-        crc, lost = statistics.crc_failures, statistics.lost_samples
-        if (crc, lost) != self._reported:
-            recorder.report_link_health(
-                crc_errors=max(0, crc - self._reported[0]),
-                lost_samples=max(0, lost - self._reported[1]),
-            )
-            self._reported = (crc, lost)
+        return (
+            statistics.crc_failures,
+            statistics.lost_samples,
+            statistics.garbage_bytes,
+            statistics.resyncs,
+        )
 
     # -- recording --------------------------------------------------------------------------
     def attach(self, recorder: Recorder) -> None:
         """Send every following block to ``recorder`` (an entered :class:`Recorder`)."""
-        statistics = self.driver.statistics
-        with self._lock:
-            self._reported = (statistics.crc_failures, statistics.lost_samples)
+        with self._lock, self._report_lock:
+            self._reported = self._link_counts()
             self._recent_rows.clear()  # row indices belong to one recorder
             self._recorded_gaps = []
             self._last_recorded_counter = None
@@ -239,7 +321,9 @@ class LiveBalance:
         with self._lock:
             recorder, self._recorder = self._recorder, None
         if recorder is not None:
+            self._report_link_health(recorder)  # what arrived since the last block counts too
             self._recorder_lost_before += recorder.queue_lost_samples
+            self._last_recorder = recorder
         return recorder
 
     @property
@@ -318,10 +402,17 @@ class LiveBalance:
         recorder_lost = self._recorder_lost_before + (
             recorder.queue_lost_samples if recorder is not None else 0
         )
+        recording = recorder if recorder is not None else self._last_recorder
         return LinkHealth(
             crc_errors=statistics.crc_failures,
             link_lost_samples=statistics.lost_samples,
             driver_dropped_blocks=self.driver.blocks_dropped,
             recorder_lost_samples=recorder_lost,
             clipped_samples=tuple(int(count) for count in self._clipped),
+            garbage_bytes=statistics.garbage_bytes,
+            resyncs=statistics.resyncs,
+            saturated_samples=self._saturated_samples,
+            over_range_samples=self._over_range_samples,
+            recording_run_id=None if recording is None else recording.run_id,
+            recording_lost_samples=0 if recording is None else recording.lost_samples,
         )

@@ -12,6 +12,23 @@ about every ``block_period_s``) to a bounded queue read with :meth:`get_block` (
 the block and counts it). CAN error frames received are counted in :attr:`error_frames` and polling
 goes on; a bus error from python-can, or ``missed_replies_limit`` requests in a row without an
 answer, ends the thread with :class:`InstrumentDisconnected` (raised by ``get_block``).
+
+Foreign frames
+--------------
+Another node that sends frames with the board's identifiers (a second master polling it, a misconfigured
+node) must not be taken for the board. A gauge sample is accepted only as the board sends it: the 8-byte
+opcode-0 frame, then the 6-byte opcode-1 frame, after this driver's request. Frames with the board's base id
+that are anything else (an opcode-1 frame first, a second opcode-0 frame, a request, another opcode or
+length, anything waiting before the next request is sent) are counted in :attr:`foreign_frames`. The board
+answers each request exactly once, so a sample is kept only once the next request finds no such frame
+waiting: a doubled reply cannot be told from the foreign one, and that sample is discarded
+(:attr:`discarded_samples`; a foreign frame is never delivered as a sample).
+
+Saturation and status
+---------------------
+ATI's rule: a gauge reading -32768 or +32767 is saturated (``GaugeBlock.saturated``). The status word comes
+with every sample (0 = healthy; see ATI's manual for its bits); :attr:`saturated_samples` and
+:attr:`status_flagged_samples` count the samples with a saturated gauge or a non-zero status word.
 """
 
 from __future__ import annotations
@@ -27,8 +44,18 @@ import can
 import numpy as np
 
 from ornitail.acquisition import netcanoem_protocol as protocol
-from ornitail.acquisition.instrument_errors import InstrumentDisconnected, InstrumentReplyError
+from ornitail.acquisition.exclusive_locks import ExclusiveLock, LockHeld, device_lock
+from ornitail.acquisition.instrument_errors import (
+    InstrumentDisconnected,
+    InstrumentInUse,
+    InstrumentReplyError,
+)
 from ornitail.core.errors import UserInputError, require_finite
+
+OPEN_QUIET_S = 0.02
+"""On open, the bus must be quiet this long (no stale frame from a crashed host's polling), s."""
+OPEN_DRAIN_LIMIT_S = 2.0
+"""On open, a bus still busy with the board's ids after this long is an error, s."""
 
 
 @dataclass
@@ -54,6 +81,11 @@ class GaugeBlock:
     status_words: np.ndarray
     gauges: np.ndarray
     saturated: np.ndarray
+
+    @property
+    def flagged(self) -> np.ndarray:
+        """(n,) bool: a gauge saturated or a non-zero status word (the board reports a condition)."""
+        return self.saturated.any(axis=1) | (self.status_words != 0)
 
 
 class NetCanOemDriver:
@@ -99,33 +131,93 @@ class NetCanOemDriver:
         self.error_frames = 0
         self.missed_replies = 0
         self.samples_polled = 0
+        self.foreign_frames = 0
+        self.discarded_samples = 0
+        self.saturated_samples = 0
+        self.status_flagged_samples = 0
+        self.stale_frames_discarded = 0
         self._bus: can.BusABC | None = None
+        self._channel_lock: ExclusiveLock | None = None
         self._poller: threading.Thread | None = None
         self._stop_polling = threading.Event()
         self._failure: Exception | None = None
 
     # -- connection -------------------------------------------------------------------------
     def open(self) -> str:
-        """Open the bus and return the board's serial number (proves it answers)."""
+        """Take the channel's lock, open the bus, drain stale frames, return the board's serial number.
+
+        The lock (a lock file per interface and channel, released by the OS when the process dies) keeps a
+        second ornitail process off the board (python-can's in-process ``virtual`` bus needs none). Replies
+        still on the bus from a host that crashed while polling are read and dropped until the bus has been
+        quiet for ``OPEN_QUIET_S`` (at most ``OPEN_DRAIN_LIMIT_S``), so none is taken for an answer.
+        """
+        if self.interface != "virtual":
+            lock = device_lock(f"can-{self.interface}-{self.channel}")
+            try:
+                lock.acquire(detail=f"{self.name} on {self.interface}:{self.channel}")
+            except LockHeld as held:
+                holder = held.holder.describe() if held.holder else "another process"
+                raise InstrumentInUse(
+                    self.name,
+                    f"CAN channel {self.interface}:{self.channel} is in use by {holder}; stop it or wait",
+                ) from None
+            except OSError:
+                lock = None  # the lock folder is not usable; open without it
+            self._channel_lock = lock
         try:
             self._bus = can.Bus(
                 interface=self.interface, channel=self.channel, bitrate=int(self.bit_rate)
             )
         except (can.CanError, OSError, ValueError, ImportError) as error:
+            self.close()
             raise InstrumentDisconnected(
                 self.name,
-                f"cannot open CAN interface {self.interface!r} channel {self.channel!r}: {error}",
+                f"cannot open CAN interface {self.interface!r} channel {self.channel!r}: "
+                f"{str(error).splitlines()[0] if str(error) else type(error).__name__}",
             ) from None
-        return self.read_serial_number()
+        try:
+            self._discard_stale_frames()
+            return self.read_serial_number()
+        except BaseException:
+            self.close()
+            raise
+
+    def _discard_stale_frames(self) -> None:
+        """Drop frames with the board's ids until none came for ``OPEN_QUIET_S`` (bounded by ``OPEN_DRAIN_LIMIT_S``)."""
+        assert self._bus is not None
+        started = last_board_frame = time.monotonic()
+        while True:
+            now = time.monotonic()
+            if now - last_board_frame >= OPEN_QUIET_S:
+                return  # other nodes' traffic may go on; the board's ids are quiet
+            if now - started > OPEN_DRAIN_LIMIT_S:
+                break
+            try:
+                message = self._bus.recv(OPEN_QUIET_S - (now - last_board_frame))
+            except (can.CanError, OSError) as error:
+                raise InstrumentDisconnected(
+                    self.name, f"CAN bus error on receive: {error}"
+                ) from None
+            if message is not None and self._is_board_frame(message):
+                self.stale_frames_discarded += 1
+                last_board_frame = time.monotonic()
+        raise InstrumentDisconnected(
+            self.name,
+            f"{self.interface}:{self.channel} did not fall quiet within {OPEN_DRAIN_LIMIT_S:g} s "
+            f"({self.stale_frames_discarded} frames); is another master polling the board?",
+        )
 
     def close(self) -> None:
-        """Stop polling and shut the bus down; safe to call twice or after a failure."""
+        """Stop polling, shut the bus down and release the channel lock; safe to call twice or after a failure."""
         if self._poller is not None:
             with contextlib.suppress(InstrumentDisconnected):
                 self.stop_polling()
         if self._bus is not None:
             self._bus.shutdown()
             self._bus = None
+        if self._channel_lock is not None:
+            self._channel_lock.release()
+            self._channel_lock = None
 
     def __enter__(self) -> NetCanOemDriver:
         self.open()
@@ -171,9 +263,80 @@ class NetCanOemDriver:
             if message.is_extended_id or message.is_remote_frame:
                 continue
             base_id, opcode = protocol.split_arbitration_id(message.arbitration_id)
-            if base_id == self.base_id and wanted.get(opcode) == message.dlc:
+            if base_id != self.base_id:
+                continue  # another node's own traffic
+            if wanted.get(opcode) == message.dlc and opcode not in replies:
                 replies[opcode] = bytes(message.data)
+            else:
+                self.foreign_frames += 1
         return replies
+
+    def _is_board_frame(self, message: can.Message) -> bool:
+        """True for a data frame with the board's base id (standard 11-bit identifier)."""
+        if message.is_error_frame or message.is_extended_id or message.is_remote_frame:
+            return False
+        return protocol.split_arbitration_id(message.arbitration_id)[0] == self.base_id
+
+    def _discard_waiting_frames(self) -> None:
+        """Count and drop frames with the board's ids that wait before a request (no request of ours is
+        outstanding, so they are foreign or late)."""
+        assert self._bus is not None
+        while True:
+            try:
+                message = self._bus.recv(0.0)
+            except (can.CanError, OSError) as error:
+                raise InstrumentDisconnected(
+                    self.name, f"CAN bus error on receive: {error}"
+                ) from None
+            if message is None:
+                return
+            if message.is_error_frame:
+                self.error_frames += 1
+            elif self._is_board_frame(message):
+                self.foreign_frames += 1
+
+    def _receive_gauge_sample(self, timeout_s: float) -> tuple[int, np.ndarray] | None | bool:
+        """The two replies to one gauge request, in the board's order: ``(status, gauges)``; None on
+        timeout; False when a doubled reply made the sample ambiguous (discarded)."""
+        assert self._bus is not None
+        first: bytes | None = None
+        ambiguous = False
+        deadline = time.monotonic() + timeout_s
+        while True:
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                return None
+            try:
+                message = self._bus.recv(remaining)
+            except (can.CanError, OSError) as error:
+                raise InstrumentDisconnected(
+                    self.name, f"CAN bus error on receive: {error}"
+                ) from None
+            if message is None:
+                return None
+            if message.is_error_frame:
+                self.error_frames += 1
+                continue
+            if not self._is_board_frame(message):
+                continue
+            opcode = protocol.split_arbitration_id(message.arbitration_id)[1]
+            if opcode == protocol.OPCODE_READ_GAUGES and message.dlc == 8:
+                if first is not None:
+                    self.foreign_frames += 1
+                    ambiguous = True
+                    continue
+                first = bytes(message.data)
+            elif (
+                opcode == protocol.OPCODE_GAUGES_SECOND_REPLY
+                and message.dlc == 6
+                and first is not None
+            ):
+                if ambiguous:
+                    self.discarded_samples += 1
+                    return False
+                return protocol.decode_gauge_replies(first, bytes(message.data))
+            else:
+                self.foreign_frames += 1
 
     def _query(self, opcode: int, wanted: dict[int, int], data: bytes = b"") -> dict[int, bytes]:
         if self._poller is not None:
@@ -337,6 +500,7 @@ class NetCanOemDriver:
         period_s = 1.0 / sample_rate_hz
         times: list[float] = []
         rows: list[tuple[int, np.ndarray]] = []
+        pending: tuple[float, tuple[int, np.ndarray]] | None = None  # confirmed by the next drain
         next_request_s = time.monotonic()
         last_block_s = next_request_s
         missed_in_a_row = 0
@@ -345,11 +509,19 @@ class NetCanOemDriver:
                 delay = next_request_s - time.monotonic()
                 if delay > 0:
                     time.sleep(delay)
+                self._confirm(pending, times, rows)
+                pending = None
+                if times and times[-1] - last_block_s >= self.block_period_s:
+                    self._deliver(times, rows)
+                    times, rows, last_block_s = [], [], times[-1]
                 sent_s = time.monotonic()
                 next_request_s = max(next_request_s + period_s, sent_s)
                 self._send(protocol.OPCODE_READ_GAUGES)
-                replies = self._receive(_GAUGE_REPLIES, self.reply_timeout_s)
-                if replies is None:
+                sample = self._receive_gauge_sample(self.reply_timeout_s)
+                if sample is False:
+                    missed_in_a_row = 0  # the board answered; a foreign frame spoiled the sample
+                    continue
+                if sample is None:
                     self.missed_replies += 1
                     missed_in_a_row += 1
                     if missed_in_a_row >= self.missed_replies_limit:
@@ -360,23 +532,33 @@ class NetCanOemDriver:
                         )
                     continue
                 missed_in_a_row = 0
-                times.append(sent_s)
-                rows.append(
-                    protocol.decode_gauge_replies(
-                        replies[protocol.OPCODE_READ_GAUGES],
-                        replies[protocol.OPCODE_GAUGES_SECOND_REPLY],
-                    )
-                )
-                self.samples_polled += 1
-                if sent_s - last_block_s >= self.block_period_s:
-                    self._deliver(times, rows)
-                    times, rows, last_block_s = [], [], sent_s
+                pending = (sent_s, sample)
+            self._confirm(pending, times, rows)
             self._deliver(times, rows)
         except InstrumentDisconnected as error:
             self._deliver(times, rows)
             self._failure = error
             with contextlib.suppress(queue.Full):
                 self.blocks.put_nowait(None)
+
+    def _confirm(
+        self,
+        pending: tuple[float, tuple[int, np.ndarray]] | None,
+        times: list[float],
+        rows: list[tuple[int, np.ndarray]],
+    ) -> None:
+        """Drain the frames waiting before the next request; keep the last sample only if none has the board's
+        ids (the board answers a request exactly once: an extra pair means one of the two was foreign)."""
+        foreign_before = self.foreign_frames
+        self._discard_waiting_frames()
+        if pending is None:
+            return
+        if self.foreign_frames != foreign_before:
+            self.discarded_samples += 1
+            return
+        times.append(pending[0])
+        rows.append(pending[1])
+        self.samples_polled += 1
 
     def _deliver(self, times: list[float], rows: list[tuple[int, np.ndarray]]) -> None:
         if not rows:
@@ -388,6 +570,8 @@ class NetCanOemDriver:
             gauges=gauges,
             saturated=protocol.saturated_gauges(gauges),
         )
+        self.saturated_samples += int(np.count_nonzero(block.saturated.any(axis=1)))
+        self.status_flagged_samples += int(np.count_nonzero(block.status_words != 0))
         try:
             self.blocks.put_nowait(block)
         except queue.Full:

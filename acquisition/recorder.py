@@ -4,16 +4,23 @@ Data path: driver thread -> :meth:`Recorder.put_block` -> bounded queue -> write
 (flushed after every write). A full queue drops the block and counts it as lost; it never blocks the
 driver. An optional drop-oldest :class:`DisplayFeed` gives a GUI a decimated copy that can never
 slow the writer. Completed set points go through the same queue (so they are journaled only after
-their samples are flushed), into the HDF5 set-point table and an fsynced journal line.
+their samples are flushed and ``samples.h5`` is fsynced), into the HDF5 set-point table and an fsynced
+journal line. Rows a driver flags (saturated, over the sensor's rated load) are counted per set point.
 
-Use it as a context manager: ``__exit__`` always writes the stop record (``completed``, ``aborted``
-or ``failed`` with the exception text) to ``run.json`` and the catalog. File layout:
-``docs/recordings.md``.
+The writer thread waits on nothing but the disk: the catalog row is kept up to date by a
+:class:`~ornitail.acquisition.catalog_sync.CatalogUpdater` thread, and a catalog locked by another
+process only delays that row (``ornitail runs`` reconciles it from the run directory later).
+
+Use it as a context manager: ``__exit__`` always writes the stop record (``completed``,
+``incomplete``, ``aborted`` or ``failed`` with the exception text) to ``run.json`` and offers it to the
+catalog. File layout: ``docs/recordings.md``.
 """
 
 from __future__ import annotations
 
+import bisect
 import collections
+import copy
 import importlib.metadata
 import json
 import math
@@ -22,11 +29,9 @@ import queue
 import re
 import secrets
 import socket
-import sqlite3
 import sys
 import threading
 import time
-import warnings
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from datetime import UTC, datetime
@@ -37,12 +42,14 @@ from typing import Any
 import h5py
 import numpy as np
 
-from ornitail.acquisition.catalog import RunCatalog, catalog_entry_from_run_metadata, utc_now_iso
+from ornitail.acquisition.catalog import utc_now_iso
+from ornitail.acquisition.catalog_sync import CatalogUpdater
 from ornitail.acquisition.counter_gaps import find_counter_gaps
 from ornitail.acquisition.recording_layout import (
     EXIT_STATUS_ABORTED,
     EXIT_STATUS_COMPLETED,
     EXIT_STATUS_FAILED,
+    EXIT_STATUS_INCOMPLETE,
     EXIT_STATUS_RUNNING,
     HDF5_RAW_SAMPLES_PATH,
     HDF5_SAMPLE_COUNTER_PATH,
@@ -50,6 +57,8 @@ from ornitail.acquisition.recording_layout import (
     HDF5_SET_POINTS_GROUP,
     RECORDING_FORMAT_NAME,
     RECORDING_FORMAT_VERSION,
+    ROW_FLAG_OVER_RATED_RANGE,
+    ROW_FLAG_SATURATED,
     RUN_METADATA_FILE_NAME,
     RUNS_FOLDER_NAME,
     SAMPLES_FILE_NAME,
@@ -68,6 +77,7 @@ from ornitail.core.hashing import content_hash_of_file
 TARGET_CHUNK_BYTES = 256 * 1024
 WRITER_STOP_TIMEOUT_S = 60.0
 SET_POINT_QUEUE_TIMEOUT_S = 10.0
+MAX_CATALOG_ERRORS_KEPT = 20
 WRITE_INTERVAL_S = 0.1
 """The writer gathers about this much data (s) before each write and flush; a crash loses at most this much
 more than what the queue holds."""
@@ -75,6 +85,39 @@ more than what the queue holds."""
 
 class RecorderFailed(RuntimeError):
     """The writer thread stopped with an error; no further samples can be recorded."""
+
+
+class FlaggedRows:
+    """Rows carrying one flag, kept as merged half-open row intervals ``[start, end)`` (a channel held at its
+    limit for an hour is one interval)."""
+
+    def __init__(self) -> None:
+        self._starts: list[int] = []
+        self._ends: list[int] = []
+        self.total = 0
+
+    def add(self, first_row: int, mask: np.ndarray) -> None:
+        """Add the rows ``first_row + i`` where ``mask[i]`` is true (rows come in increasing order)."""
+        if not mask.any():
+            return
+        edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.astype(np.int8), [0]))))
+        for start, end in zip(edges[0::2].tolist(), edges[1::2].tolist(), strict=True):
+            start, end = start + first_row, end + first_row
+            if self._ends and self._ends[-1] == start:
+                self._ends[-1] = end
+            else:
+                self._starts.append(start)
+                self._ends.append(end)
+            self.total += end - start
+
+    def count_in(self, first_row: int, last_row: int) -> int:
+        """Flagged rows among ``first_row .. last_row`` (inclusive)."""
+        count = 0
+        index = bisect.bisect_right(self._ends, first_row)
+        while index < len(self._starts) and self._starts[index] <= last_row:
+            count += min(self._ends[index], last_row + 1) - max(self._starts[index], first_row)
+            index += 1
+        return count
 
 
 @dataclass
@@ -167,7 +210,8 @@ class Recorder:
     display_capacity_blocks : int
         Blocks the display feed keeps (drop-oldest).
     register_in_catalog : bool
-        Register the run in ``<data_root>/catalog.sqlite`` at start, per set point and at stop.
+        Register the run in ``<data_root>/catalog.sqlite`` at start, per set point and at stop (from a
+        thread of its own; a locked catalog never delays the recording).
     """
 
     def __init__(
@@ -212,7 +256,10 @@ class Recorder:
             DisplayFeed(display_decimation, display_capacity_blocks) if display_decimation else None
         )
         self._register_in_catalog = register_in_catalog
-        self._catalog: RunCatalog | None = None
+        self._catalog_updater: CatalogUpdater | None = None
+        self.catalog_synced: bool | None = None
+        """After the run: True if its stop record reached the catalog, False if the catalog stayed locked (the
+        next reconcile brings the row up to date), None without a catalog."""
         self._current_metadata: dict[str, Any] = {}
         self._run_lock = RunLock(self.run_directory)
         self._samples_file: h5py.File | None = None
@@ -221,6 +268,7 @@ class Recorder:
         self._writer_cpu_s: float | None = None
         self._accepting_blocks = False
         self._abort_reason: str | None = None
+        self._incomplete_reason: str | None = None
         # Counted in the driver thread (put_block) and by report_link_health:
         self._next_sample_index = 0
         self._queue_lost_blocks = 0
@@ -228,7 +276,17 @@ class Recorder:
         self._queue_loss_positions: list[dict[str, int]] = []
         self._link_crc_errors = 0
         self._link_lost_samples = 0
+        self._link_garbage_bytes = 0
+        self._link_resyncs = 0
+        self._link_foreign_frames = 0
         self._link_report_count = 0
+        # Rows flagged by the driver (put_block), read by complete_set_point in the caller's thread:
+        self._flag_lock = threading.Lock()
+        self._flags_checked = False
+        self._flagged_rows = {
+            ROW_FLAG_SATURATED: FlaggedRows(),
+            ROW_FLAG_OVER_RATED_RANGE: FlaggedRows(),
+        }
         # Written only by the writer thread:
         self._rows_written = 0
         self._last_counter: int | None = None
@@ -255,7 +313,24 @@ class Recorder:
         """Samples written to ``samples.h5`` and flushed so far (they survive a crash)."""
         return self._rows_written
 
-    def put_block(self, counters: np.ndarray, samples: np.ndarray) -> bool:
+    @property
+    def lost_samples(self) -> int:
+        """Samples lost so far, each counted once: those the sample counters say are missing among the rows
+        written (link, driver or recorder-queue losses alike; ``run.json``'s ``counter_gaps.missing_samples``)."""
+        return self._gap_missing_samples
+
+    def wait_for_catalog(self, timeout_s: float) -> bool:
+        """Block until the catalog row holds the newest metadata (or ``timeout_s`` passed); return which.
+
+        Recording never needs this: it is for callers that read the catalog right after a change (tests).
+        """
+        if self._catalog_updater is None:
+            return False
+        return self._catalog_updater.wait_up_to_date(timeout_s)
+
+    def put_block(
+        self, counters: np.ndarray, samples: np.ndarray, flags: np.ndarray | None = None
+    ) -> bool:
         """Hand one block of raw samples to the writer; never blocks (call from one thread).
 
         Parameters
@@ -264,6 +339,10 @@ class Recorder:
             Shape ``(n,)``, non-negative integers: the driver's sample counter of each row.
         samples : numpy.ndarray
             Shape ``(n, n_channels)``: raw values (V or ADC counts) in the layout's channel order.
+        flags : numpy.ndarray, optional
+            Shape ``(n,)`` uint8 bitmask per row: ``ROW_FLAG_SATURATED`` (a channel at the ADC limit or the
+            device's over-range status), ``ROW_FLAG_OVER_RATED_RANGE`` (load beyond the sensor's rating).
+            Giving flags (even all zero) marks the run as checked; rows are counted per set point.
 
         Returns
         -------
@@ -277,6 +356,12 @@ class Recorder:
             raise RuntimeError("put_block called outside the recorder's with-block")
         counters_copy, samples_copy = self._checked_copies(counters, samples)
         row_count = len(counters_copy)
+        if flags is not None:
+            flags = np.asarray(flags)
+            if flags.shape != (row_count,) or flags.dtype.kind not in "iub":
+                raise ValueError(
+                    f"flags must be ({row_count},) integers, got {flags.shape} {flags.dtype}"
+                )
         try:
             self._queue.put_nowait(_SampleBlock(counters_copy, samples_copy))
         except queue.Full:
@@ -293,6 +378,11 @@ class Recorder:
             return False
         if self.display_feed is not None:
             self.display_feed.offer(counters_copy, samples_copy, self._next_sample_index)
+        if flags is not None:
+            with self._flag_lock:
+                self._flags_checked = True
+                for bit, rows in self._flagged_rows.items():
+                    rows.add(self._next_sample_index, (flags.astype(np.uint8) & bit) != 0)
         self._next_sample_index += row_count
         return True
 
@@ -318,13 +408,27 @@ class Recorder:
             raise ValueError(f"samples of dtype {samples.dtype} do not fit {self._sample_dtype}")
         return counters.astype(self._counter_dtype), samples.astype(self._sample_dtype)
 
-    def report_link_health(self, crc_errors: int = 0, lost_samples: int = 0) -> None:
-        """Add the CRC failures and lost samples the driver detected since its last report."""
-        if crc_errors < 0 or lost_samples < 0:
+    def report_link_health(
+        self,
+        crc_errors: int = 0,
+        lost_samples: int = 0,
+        *,
+        garbage_bytes: int = 0,
+        resyncs: int = 0,
+        foreign_frames: int = 0,
+    ) -> None:
+        """Add what the driver detected since its last report: CRC failures, lost samples (its counter gaps),
+        bytes outside valid frames, stretches of them (resynchronisations), and frames from another node that
+        used the device's identifiers."""
+        counts = (crc_errors, lost_samples, garbage_bytes, resyncs, foreign_frames)
+        if min(counts) < 0:
             raise ValueError("link health counts must be non-negative")
         with self._metadata_lock:
             self._link_crc_errors += int(crc_errors)
             self._link_lost_samples += int(lost_samples)
+            self._link_garbage_bytes += int(garbage_bytes)
+            self._link_resyncs += int(resyncs)
+            self._link_foreign_frames += int(foreign_frames)
             self._link_report_count += 1
 
     # ----- sweep side --------------------------------------------------------------------------
@@ -333,8 +437,9 @@ class Recorder:
         """Record a completed set point; it is journaled after its samples are flushed.
 
         ``record.first_sample_index``/``last_sample_index`` are row indices from
-        :attr:`next_sample_index`; the recorder fills ``set_point_index``, ``completed_utc`` and
-        ``link_health``.
+        :attr:`next_sample_index`; the recorder fills ``set_point_index``, ``completed_utc``,
+        ``link_health`` and, when the driver flags rows, ``saturated_samples`` and
+        ``over_range_samples`` (at once: the caller can warn about them).
         """
         record.validate()
         _require_json_serialisable("set point", record.to_json_dict())
@@ -347,6 +452,13 @@ class Recorder:
             raise RecorderFailed(f"the writer stopped: {self._writer_error!r}")
         with self._metadata_lock:
             record.link_health = self._link_health_snapshot()
+        with self._flag_lock:
+            if self._flags_checked:
+                first, last = record.first_sample_index, record.last_sample_index
+                saturated = self._flagged_rows[ROW_FLAG_SATURATED]
+                over_range = self._flagged_rows[ROW_FLAG_OVER_RATED_RANGE]
+                record.saturated_samples = saturated.count_in(first, last)
+                record.over_range_samples = over_range.count_in(first, last)
         try:
             self._queue.put(_CompletedSetPoint(record), timeout=SET_POINT_QUEUE_TIMEOUT_S)
         except queue.Full:
@@ -360,6 +472,11 @@ class Recorder:
     def mark_aborted(self, reason: str) -> None:
         """Record that the user stopped the run; it ends as ``aborted`` with ``reason``."""
         self._abort_reason = reason
+
+    def mark_incomplete(self, reason: str) -> None:
+        """Record that some set points are not usable (e.g. lossy after retakes, named in ``reason``); a run
+        that otherwise completes ends as ``incomplete`` with ``reason``."""
+        self._incomplete_reason = reason
 
     def _set_bias(self, bias_voltages_v: Mapping[str, float]) -> None:
         for name, value in bias_voltages_v.items():
@@ -378,7 +495,9 @@ class Recorder:
         try:
             self._write_metadata(EXIT_STATUS_RUNNING, None, None)
             if self._register_in_catalog:
-                self._catalog = RunCatalog(self.data_root)
+                self._catalog_updater = CatalogUpdater(
+                    self.data_root, self.run_id, on_error=self._note_catalog_error
+                )
             self._create_samples_file()
             self._update_catalog()
             self._writer_thread = threading.Thread(
@@ -401,15 +520,21 @@ class Recorder:
             status, reason = EXIT_STATUS_COMPLETED, None
             if self._abort_reason is not None:
                 status, reason = EXIT_STATUS_ABORTED, self._abort_reason
+            elif self._incomplete_reason is not None:
+                status, reason = EXIT_STATUS_INCOMPLETE, self._incomplete_reason
         elif isinstance(exception, RunAborted | KeyboardInterrupt):
             status = EXIT_STATUS_ABORTED
             reason = str(exception) or f"stopped by the user ({type(exception).__name__})"
         else:
             status, reason = EXIT_STATUS_FAILED, f"{type(exception).__name__}: {exception}"
-        self._finish(status, reason, raise_catalog_errors=exception is None)
+        self._finish(status, reason)
 
-    def _finish(self, status: str, reason: str | None, raise_catalog_errors: bool = False) -> None:
-        """Stop the writer, close the file, write the stop record; the record is always written."""
+    def _finish(self, status: str, reason: str | None) -> None:
+        """Stop the writer, close the file, write the stop record; the record is always written.
+
+        The catalog gets the stop record from its updater thread, which is given a few seconds; a catalog
+        locked for longer is brought up to date by the next reconcile (the run directory is the truth).
+        """
         self._accepting_blocks = False
         try:
             self._stop_writer()
@@ -422,9 +547,13 @@ class Recorder:
                 status, reason = EXIT_STATUS_FAILED, _joined(reason, writer_text)
             try:
                 self._write_metadata(status, reason, utc_now_iso())
-                self._update_catalog(raise_errors=raise_catalog_errors)
+                self._update_catalog()
             finally:
-                self._run_lock.release()
+                try:
+                    if self._catalog_updater is not None:
+                        self.catalog_synced = self._catalog_updater.close()
+                finally:
+                    self._run_lock.release()
 
     def _stop_writer(self) -> None:
         thread = self._writer_thread
@@ -436,6 +565,7 @@ class Recorder:
         if self._samples_file is not None:
             self._samples_file.close()
             self._samples_file = None
+            _fsync_path(self.run_directory / SAMPLES_FILE_NAME)
 
     # ----- metadata ----------------------------------------------------------------------------
 
@@ -444,6 +574,44 @@ class Recorder:
             "crc_errors": self._link_crc_errors,
             "link_lost_samples": self._link_lost_samples,
             "queue_lost_samples": self._queue_lost_samples,
+            "garbage_bytes": self._link_garbage_bytes,
+            "resyncs": self._link_resyncs,
+            "foreign_frames": self._link_foreign_frames,
+        }
+
+    def _counter_gap_summary(self) -> dict[str, Any]:
+        return {
+            "count": self._gap_count,
+            "missing_samples": self._gap_missing_samples,
+            "positions": list(self._gap_positions),
+            "positions_truncated": self._gap_count > len(self._gap_positions),
+        }
+
+    def _saturation_summary(self) -> dict[str, Any]:
+        """Flagged rows of the set points journalled so far, and of the whole stream (``run.json``)."""
+        affected = [
+            {
+                "set_point_index": record.set_point_index,
+                "plan_point_index": record.plan_point_index,
+                "kind": record.kind,
+                "saturated_samples": record.saturated_samples,
+                "over_range_samples": record.over_range_samples,
+            }
+            for record in self._set_points
+            if record.is_flagged
+        ]
+        with self._flag_lock:
+            checked = self._flags_checked
+            stream_saturated = self._flagged_rows[ROW_FLAG_SATURATED].total
+            stream_over_range = self._flagged_rows[ROW_FLAG_OVER_RATED_RANGE].total
+        return {
+            "checked": checked,
+            "saturated_samples": sum(int(r.saturated_samples or 0) for r in self._set_points),
+            "over_range_samples": sum(int(r.over_range_samples or 0) for r in self._set_points),
+            "affected_set_points": affected[:MAX_STORED_GAP_POSITIONS],
+            "affected_set_point_count": len(affected),
+            "stream_saturated_samples": stream_saturated,
+            "stream_over_range_samples": stream_over_range,
         }
 
     def _metadata(self, status: str, reason: str | None, stop_time: str | None) -> dict[str, Any]:
@@ -481,17 +649,16 @@ class Recorder:
                 "lost_samples": self._queue_lost_samples,
                 "positions": list(self._queue_loss_positions),
             },
-            "counter_gaps": {
-                "count": self._gap_count,
-                "missing_samples": self._gap_missing_samples,
-                "positions": list(self._gap_positions),
-                "positions_truncated": self._gap_count > len(self._gap_positions),
-            },
+            "counter_gaps": self._counter_gap_summary(),
             "link_health": {
                 "crc_errors": self._link_crc_errors,
                 "lost_samples": self._link_lost_samples,
+                "garbage_bytes": self._link_garbage_bytes,
+                "resyncs": self._link_resyncs,
+                "foreign_frames": self._link_foreign_frames,
                 "report_count": self._link_report_count,
             },
+            "saturation": self._saturation_summary(),
             "display_feed": None
             if self.display_feed is None
             else {
@@ -509,19 +676,18 @@ class Recorder:
                 self.run_directory / RUN_METADATA_FILE_NAME, self._current_metadata
             )
 
-    def _update_catalog(self, raise_errors: bool = True) -> None:
-        if self._catalog is None:
+    def _update_catalog(self) -> None:
+        """Offer the current metadata to the catalog updater (never waits for SQLite)."""
+        if self._catalog_updater is None:
             return
-        relative = f"{RUNS_FOLDER_NAME}/{self.run_id}"
-        try:
-            with self._metadata_lock:
-                entry = catalog_entry_from_run_metadata(self._current_metadata, relative)
-            self._catalog.upsert_run(entry)
-        except (sqlite3.Error, UserInputError) as error:
-            self._catalog_errors.append(str(error))
-            if raise_errors:
-                raise
-            warnings.warn(f"catalog not updated for {self.run_id}: {error}", stacklevel=2)
+        with self._metadata_lock:
+            snapshot = copy.deepcopy(self._current_metadata)
+        self._catalog_updater.offer(snapshot)
+
+    def _note_catalog_error(self, text: str) -> None:
+        """Keep the first catalog failures for ``run.json`` (called from the updater's thread)."""
+        if len(self._catalog_errors) < MAX_CATALOG_ERRORS_KEPT:
+            self._catalog_errors.append(text)
 
     # ----- writer thread -----------------------------------------------------------------------
 
@@ -631,18 +797,43 @@ class Recorder:
         values["motor_rpm_mean"] = (
             math.nan if record.motor_rpm_mean is None else record.motor_rpm_mean
         )
+        for name in ("saturated_samples", "over_range_samples"):
+            values[name] = -1 if values[name] is None else values[name]
         for name in HDF5_SET_POINT_COLUMNS:
             dataset = table[name]
             dataset.resize(record.set_point_index + 1, axis=0)
             dataset[record.set_point_index] = values[name]
         self._samples_file.flush()
+        # The journal line points into samples.h5: its rows must be on disk before the line is.
+        os.fsync(self._samples_file.id.get_vfd_handle())
         append_journal_line(self.run_directory, record)
         self._set_points.append(record)
         with self._metadata_lock:
             self._current_metadata["set_point_count"] = len(self._set_points)
             self._current_metadata["set_point_summary"] = summarize_set_points(self._set_points)
             self._current_metadata["sample_count"] = self._rows_written
-        self._update_catalog(raise_errors=False)
+            self._current_metadata["saturation"] = self._saturation_summary()
+            self._current_metadata["counter_gaps"] = self._counter_gap_summary()
+            self._current_metadata["link_health"].update(
+                {
+                    "crc_errors": self._link_crc_errors,
+                    "lost_samples": self._link_lost_samples,
+                    "garbage_bytes": self._link_garbage_bytes,
+                    "resyncs": self._link_resyncs,
+                    "foreign_frames": self._link_foreign_frames,
+                    "report_count": self._link_report_count,
+                }
+            )
+        self._update_catalog()
+
+
+def _fsync_path(path: Path) -> None:
+    """fsync a closed file's content to disk."""
+    descriptor = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(descriptor)
+    finally:
+        os.close(descriptor)
 
 
 def _require_json_serialisable(what: str, values: dict[str, Any]) -> None:

@@ -37,9 +37,13 @@ EXIT_STATUS_COMPLETED = "completed"
 EXIT_STATUS_ABORTED = "aborted"
 EXIT_STATUS_FAILED = "failed"
 EXIT_STATUS_CRASHED = "crashed"
+EXIT_STATUS_INCOMPLETE = "incomplete"
+"""Every planned set point was visited, but some record still lost samples after its retakes (named in
+``failure_reason``); ``ornitail sweep --resume`` records those points again."""
 ALL_EXIT_STATUSES = (
     EXIT_STATUS_RUNNING,
     EXIT_STATUS_COMPLETED,
+    EXIT_STATUS_INCOMPLETE,
     EXIT_STATUS_ABORTED,
     EXIT_STATUS_FAILED,
     EXIT_STATUS_CRASHED,
@@ -48,6 +52,12 @@ ALL_EXIT_STATUSES = (
 SET_POINT_KIND_MEASUREMENT = "measurement"
 SET_POINT_KIND_TARE = "tare"
 SET_POINT_KINDS = (SET_POINT_KIND_MEASUREMENT, SET_POINT_KIND_TARE)
+
+# Per-row flags a driver may hand to the recorder with each block (bitmask, uint8):
+ROW_FLAG_SATURATED = 0x01
+"""The row holds a channel at the ADC range limit (clipped), or the device flagged it over-range."""
+ROW_FLAG_OVER_RATED_RANGE = 0x02
+"""The load of the row exceeds the sensor's rated range (the calibration file's ``max`` per axis)."""
 
 # Numeric columns of the HDF5 per-set-point table, in order, with their dtypes.
 HDF5_SET_POINT_COLUMNS: dict[str, str] = {
@@ -64,7 +74,10 @@ HDF5_SET_POINT_COLUMNS: dict[str, str] = {
     "settle_time_s": "float64",
     "settled": "uint8",
     "motor_rpm_mean": "float64",
+    "saturated_samples": "int64",
+    "over_range_samples": "int64",
 }
+"""``saturated_samples`` and ``over_range_samples`` are -1 where the recording did not check (no row flags)."""
 
 
 class RunAborted(Exception):
@@ -166,8 +179,11 @@ class SetPointRecord:
 
     Sample indices are 0-based row indices into ``/samples/raw`` (inclusive at both ends). The
     recorder fills ``set_point_index`` (0, 1, ... in completion order), ``completed_utc`` and
-    ``link_health`` (cumulative link-health counts when the set point completed). ``extra`` holds
-    further JSON-serialisable values (e.g. a hot-wire mean velocity).
+    ``link_health`` (cumulative link-health counts when the set point completed), and
+    ``saturated_samples`` / ``over_range_samples``: rows of the record flagged saturated (a channel at the ADC
+    range limit, or the device's over-range status) and over the sensor's rated load (None: not checked, e.g. a
+    journal written before ornitail counted them). ``extra`` holds further JSON-serialisable values (e.g. a
+    hot-wire mean velocity).
     """
 
     plan_point_index: int
@@ -182,6 +198,8 @@ class SetPointRecord:
     settle_time_s: float = 0.0
     settled: bool = True
     motor_rpm_mean: float | None = None
+    saturated_samples: int | None = None
+    over_range_samples: int | None = None
     set_point_index: int = -1
     completed_utc: str = ""
     link_health: dict[str, int] = field(default_factory=dict)
@@ -204,6 +222,16 @@ class SetPointRecord:
     def to_json_dict(self) -> dict[str, Any]:
         """Return the record as a JSON-serialisable dictionary (one journal line)."""
         return asdict(self)
+
+    @property
+    def samples_missing_in_record(self) -> int:
+        """Samples the sample counter says are missing inside this record (``extra``; 0 if not journalled)."""
+        return int(self.extra.get("samples_missing_in_record") or 0)
+
+    @property
+    def is_flagged(self) -> bool:
+        """True if rows of the record were flagged saturated or over the rated range."""
+        return bool(self.saturated_samples) or bool(self.over_range_samples)
 
     @classmethod
     def from_json_dict(cls, values: dict[str, Any]) -> SetPointRecord:

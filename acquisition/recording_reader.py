@@ -32,6 +32,7 @@ from ornitail.acquisition.recording_layout import (
 )
 from ornitail.acquisition.run_files import read_journal, read_json_file, run_is_live
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import check_input_file
 
 MAX_STORED_GAP_POSITIONS = 1000
 _COUNTER_READ_ROWS = 1 << 20
@@ -42,6 +43,8 @@ CRASH_FAILURE_REASON = (
 
 def _open_samples_file(path: Path) -> h5py.File:
     # locking=False: a reader must not need (or take) the writer's lock; it reads flushed data only.
+    if path.exists():
+        check_input_file(path, limit=None)  # a FIFO or device would block h5py
     try:
         return h5py.File(path, "r", locking=False)
     except FileNotFoundError:
@@ -108,6 +111,8 @@ class Recording:
     ) -> tuple[np.ndarray, np.ndarray]:
         """Return ``(counters, samples)`` of rows ``first..last`` (inclusive; default: to end)."""
         last = self.sample_count - 1 if last_sample_index is None else last_sample_index
+        if not self.samples_path.exists():
+            raise UserInputError(str(self.samples_path), "samples file not found")
         if not 0 <= first_sample_index <= last + 1 or last >= self.sample_count:
             raise UserInputError(
                 str(self.samples_path),
@@ -245,5 +250,37 @@ def _metadata_from_files(recording: Recording) -> dict[str, Any]:
         last_health = recording.set_points[-1].link_health
         metadata["link_health"]["crc_errors"] = last_health.get("crc_errors", 0)
         metadata["link_health"]["lost_samples"] = last_health.get("link_lost_samples", 0)
+        for name in ("garbage_bytes", "resyncs", "foreign_frames"):
+            metadata["link_health"][name] = last_health.get(name, 0)
         metadata["queue_overflow"]["lost_samples"] = last_health.get("queue_lost_samples", 0)
+    metadata["saturation"] = _saturation_from_journal(
+        recording.set_points, metadata.get("saturation") or {}
+    )
     return metadata
+
+
+def _saturation_from_journal(
+    set_points: list[SetPointRecord], at_start: dict[str, Any]
+) -> dict[str, Any]:
+    """The ``saturation`` block of a run without a stop record, from its journalled set points (the stream
+    totals were last written at start and are kept as they were)."""
+    affected = [
+        {
+            "set_point_index": record.set_point_index,
+            "plan_point_index": record.plan_point_index,
+            "kind": record.kind,
+            "saturated_samples": record.saturated_samples,
+            "over_range_samples": record.over_range_samples,
+        }
+        for record in set_points
+        if record.is_flagged
+    ]
+    return {
+        **at_start,
+        "checked": bool(at_start.get("checked"))
+        or any(record.saturated_samples is not None for record in set_points),
+        "saturated_samples": sum(int(record.saturated_samples or 0) for record in set_points),
+        "over_range_samples": sum(int(record.over_range_samples or 0) for record in set_points),
+        "affected_set_points": affected[:MAX_STORED_GAP_POSITIONS],
+        "affected_set_point_count": len(affected),
+    }

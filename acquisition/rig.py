@@ -5,6 +5,16 @@
 ptys and a virtual CAN channel, and the same drivers connect to them); ``close()`` always brings the
 motor and the tunnel fan to a safe state before closing anything, also after an error. Use it as a
 context manager so that every exit path goes through ``close()``.
+
+Exclusive access: every driver opens its port or CAN channel exclusively (a lock file per port that names the
+holder, and pyserial's ``exclusive=True``; the OS releases both when the process dies), so a second process on the
+same rig is refused with :class:`InstrumentInUse` before it sends anything. Known state: each driver drains what
+a crashed host left behind (the DAQ board is sent ``STOP`` first), then ``connect()`` commands motor off, fan
+stop and strut halt before homing, whatever the instruments were doing.
+
+A rig file with ``[rig].simulator_control`` connects to simulated instruments served by another process
+(``python -m ornitail.acquisition.rig_simulator_server``): the ports are real ptys, rig time runs at the server's
+time scale and the simulated vehicle is changed through the control socket.
 """
 
 from __future__ import annotations
@@ -20,6 +30,7 @@ from ornitail.acquisition.flapping_motor_driver import FlappingMotorDriver
 from ornitail.acquisition.instrument_errors import InstrumentError
 from ornitail.acquisition.netcanoem_driver import NetCanOemDriver
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, RigDescription, read_rig_file
+from ornitail.acquisition.rig_simulator_server import SimulatorControl
 from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
 from ornitail.acquisition.simulated_rig_instruments import SimulatedRigInstruments
 from ornitail.acquisition.strut_pitch_driver import StrutPitchDriver
@@ -27,6 +38,11 @@ from ornitail.acquisition.tunnel_fan_driver import TunnelFanDriver
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.calibration.tunnel_table import TunnelVelocityTable
 from ornitail.core.errors import UserInputError, require_finite
+
+REPLY_TIMEOUT_S = 1.0
+"""How long a real instrument may take to answer a command, s."""
+SIMULATED_REPLY_TIMEOUT_S = 5.0
+"""The same for simulated instruments (threads of a process a loaded machine may starve for a while), s."""
 
 
 class Rig:
@@ -68,6 +84,8 @@ class Rig:
         self.motor: FlappingMotorDriver | None = None
         self.balance: SerialDaqDriver | NetCanOemDriver | None = None
         self.simulators: SimulatedRigInstruments | None = None
+        self.simulator_control: SimulatorControl | None = None
+        self._time_scale = description.time_scale if description.simulated else 1.0
         self._balance_clock: tuple[float, float] | None = None  # (rig time at start, s; rate, Hz)
 
     @classmethod
@@ -85,7 +103,16 @@ class Rig:
 
     # -- connection -------------------------------------------------------------------------
     def connect(self, *, home_strut: bool = True) -> Rig:
-        """Open every instrument (starting the simulators first if simulated); home the strut."""
+        """Open every instrument exclusively (starting the simulators first if simulated), command the safe
+        state (motor off, fan stop, strut halt), home the strut.
+
+        Raises
+        ------
+        InstrumentInUse
+            Another process holds one of the rig's ports (nothing was sent to any instrument).
+        InstrumentError
+            An instrument is absent or does not answer; the instruments already open are made safe and closed.
+        """
         description = self.description
         limits = description.limits
         fan_port, strut_port, motor_port = (
@@ -96,6 +123,9 @@ class Rig:
         daq_port = description.serial_daq.port
         can_interface, can_channel = description.can.interface, description.can.channel
         try:
+            if description.simulator_control is not None:
+                self.simulator_control = SimulatorControl(description.simulator_control)
+                self._time_scale = float(self.simulator_control.state()["time_scale"])
             if description.simulated:
                 self.simulators = SimulatedRigInstruments.start(
                     description, self.calibration, self.tunnel_table
@@ -108,13 +138,17 @@ class Rig:
                 if self.simulators.daq_board is not None:
                     daq_port = self.simulators.daq_board.port_path
                 can_interface, can_channel = "virtual", self.simulators.can_channel or can_channel
+            simulated = description.simulated or description.simulator_control is not None
+            reply_timeout_s = SIMULATED_REPLY_TIMEOUT_S if simulated else REPLY_TIMEOUT_S
             self.fan = TunnelFanDriver(
                 fan_port, max_rpm=self.max_fan_rpm, baud=description.fan.baud
             )
+            self.fan.connection.reply_timeout_s = reply_timeout_s
             self.fan.open()
             self.motor = FlappingMotorDriver(
                 motor_port, max_rpm=limits.max_motor_rpm, baud=description.motor.baud
             )
+            self.motor.connection.reply_timeout_s = reply_timeout_s
             self.motor.open()
             self.strut = StrutPitchDriver(
                 strut_port,
@@ -122,9 +156,12 @@ class Rig:
                 pitch_max_rad=limits.pitch_max_rad,
                 baud=description.strut.baud,
             )
+            self.strut.connection.reply_timeout_s = reply_timeout_s
             self.strut.open()
             if description.balance_route == "serial_daq":
-                self.balance = SerialDaqDriver(daq_port, baud=description.serial_daq.baud)
+                self.balance = SerialDaqDriver(
+                    daq_port, baud=description.serial_daq.baud, reply_timeout_s=reply_timeout_s
+                )
             else:
                 self.balance = NetCanOemDriver(
                     interface=can_interface,
@@ -133,8 +170,11 @@ class Rig:
                     base_id=description.can.base_id,
                 )
             self.balance.open()
+            errors = self.safe_state()  # whatever a crashed host left running
+            if errors:
+                raise errors[0]
             if home_strut:
-                self.strut.home(timeout_s=max(5.0, 60.0 / description.time_scale))
+                self.strut.home(timeout_s=max(5.0, 60.0 / self._time_scale))
         except BaseException:
             self.close(raise_errors=False)
             raise
@@ -157,8 +197,9 @@ class Rig:
                     errors.append(error)
         return errors
 
-    def close(self, *, raise_errors: bool = True) -> None:
-        """Safe state first, then close every driver and simulator; raise the first error last."""
+    def close(self, *, raise_errors: bool = True) -> list[InstrumentError]:
+        """Safe state first, then close every driver and simulator; raise the first error last (or, with
+        ``raise_errors=False``, return the errors met)."""
         errors = self.safe_state()
         if self.balance is not None:
             try:
@@ -172,8 +213,10 @@ class Rig:
             self.simulators.close()
             self.simulators = None
         self.fan = self.strut = self.motor = self.balance = None
+        self.simulator_control = None
         if errors and raise_errors:
             raise errors[0]
+        return errors
 
     # -- set points -------------------------------------------------------------------------
     def _connected(self, driver):
@@ -254,8 +297,8 @@ class Rig:
         return {
             "name": description.name,
             "file": str(description.path),
-            "simulated": description.simulated,
-            "time_scale": description.time_scale,
+            "simulated": description.simulated or description.simulator_control is not None,
+            "time_scale": self._time_scale,
             "balance_route": description.balance_route,
             "tool_transform_mm_deg": list(description.tool_transform.as_mm_deg()),
         }
@@ -271,10 +314,13 @@ class Rig:
         """Rig time, s: the simulated clock of a simulated rig, else the monotonic wall clock."""
         if self.simulators is not None:
             return self.simulators.clock.now_s()
-        return time.monotonic()
+        return time.monotonic() * self._time_scale
 
     def mount_vehicle(self, tail_id: str, x_h_m: float) -> None:
         """Tell a simulated rig which vehicle is on the balance (a real rig has the real one)."""
+        if self.simulator_control is not None:
+            self.simulator_control.request("mount", tail_id=tail_id, x_h_mm=x_h_m * 1000.0)
+            return
         if self.simulators is None:
             return
         from ornitail.sim.configuration import study_configuration
@@ -293,13 +339,15 @@ class Rig:
         if self.simulators is not None:
             self.simulators.signals.set_operating_point(tail_attached=tail_attached)
             return
+        if self.simulator_control is not None:
+            self.simulator_control.request("tail", attached=tail_attached)
+            return
         action = "Fit the tail" if tail_attached else "Remove the tail (keep the base tail mount)"
         operator_prompt(f"{action}; motor and tunnel are off.")
 
     def wait_simulated_s(self, simulated_seconds: float) -> None:
         """Sleep ``simulated_seconds`` of rig time (wall time / time scale on a simulated rig)."""
-        scale = self.description.time_scale if self.description.simulated else 1.0
-        time.sleep(max(0.0, simulated_seconds) / scale)
+        time.sleep(max(0.0, simulated_seconds) / self._time_scale)
 
     # -- balance ----------------------------------------------------------------------------
     def start_balance(self, sample_rate_hz: float | None = None) -> None:

@@ -8,7 +8,6 @@ file's folder. Unknown sections and keys are refused, so a typo cannot silently 
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -18,13 +17,18 @@ from ornitail.acquisition.line_instrument_connection import DEFAULT_LINE_BAUD
 from ornitail.acquisition.netcanoem_protocol import DEFAULT_BASE_ID, gauge_sample_rate_ceiling_hz
 from ornitail.calibration.tool_transform import ToolTransform
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import read_toml_file
 from ornitail.core.toml_table import TomlTable
 
 DEFAULT_RIG_FILE = Path(__file__).parent / "data" / "simulated_rig.toml"
 BALANCE_ROUTES = ("serial_daq", "can")
+MIN_BAUD = 1200
+"""Slowest serial line rate accepted, bit/s."""
+MAX_BAUD = 12_000_000
+"""Fastest serial line rate accepted, bit/s (the fastest USB-serial bridges, e.g. FTDI FT2232H)."""
 
 _ALLOWED_KEYS = {
-    "rig": {"name", "simulated", "time_scale", "seed"},
+    "rig": {"name", "simulated", "time_scale", "seed", "simulator_control"},
     "balance": {"route", "calibration", "tool_transform_mm_deg", "serial_daq", "can"},
     "balance.serial_daq": {"port", "baud", "sample_rate_hz"},
     "balance.can": {"interface", "channel", "bit_rate", "base_id", "sample_rate_hz"},
@@ -98,6 +102,8 @@ class RigDescription:
     motor: LinePortSettings
     gear_ratio: float
     limits: SafetyLimits
+    simulator_control: Path | None = None
+    """Control socket of simulated instruments served by another process (``rig_simulator_server``), or None."""
 
 
 def _fields(path: Path, section: str, table: Any) -> TomlTable:
@@ -113,14 +119,7 @@ def _tool_transform(table: TomlTable, key: str) -> ToolTransform:
 def read_rig_file(path: str | Path) -> RigDescription:
     """Read and check a rig file; see ``docs/rig-file.md``."""
     path = Path(path)
-    try:
-        document = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as error:
-        raise UserInputError(
-            str(path), f"cannot read rig file ({error.strerror or error})"
-        ) from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise UserInputError(str(path), f"not valid TOML: {error}") from None
+    document = read_toml_file(path)
     unknown = sorted(set(document) - set(_REQUIRED_SECTIONS))
     if unknown:
         raise UserInputError(
@@ -134,12 +133,20 @@ def read_rig_file(path: str | Path) -> RigDescription:
     balance = _fields(path, "balance", document["balance"])
     route = balance.text("route", choices=BALANCE_ROUTES)
     simulated = rig.boolean("simulated", False)
+    simulator_control = None
+    if "simulator_control" in rig.table:
+        simulator_control = (path.parent / rig.text("simulator_control")).resolve()
+        if simulated:
+            raise UserInputError(
+                rig.where("simulator_control"),
+                "a rig served by an external simulator connects to its ports: set simulated = false",
+            )
     daq = _fields(path, "balance.serial_daq", balance.table.get("serial_daq", {}))
     can = _fields(path, "balance.can", balance.table.get("can", {}))
     needs_daq = route == "serial_daq"
     serial_daq = SerialDaqSettings(
         port=daq.text("port", "simulated" if simulated or not needs_daq else None),
-        baud=daq.integer("baud", DEFAULT_BAUD, minimum=1200),
+        baud=daq.integer("baud", DEFAULT_BAUD, minimum=MIN_BAUD, maximum=MAX_BAUD),
         sample_rate_hz=daq.number("sample_rate_hz", 10_000.0, positive=True),
     )
     can_settings = CanSettings(
@@ -171,7 +178,7 @@ def read_rig_file(path: str | Path) -> RigDescription:
     def line_port(fields: TomlTable) -> LinePortSettings:
         return LinePortSettings(
             port=fields.text("port", "simulated" if simulated else None),
-            baud=fields.integer("baud", DEFAULT_LINE_BAUD, minimum=1200),
+            baud=fields.integer("baud", DEFAULT_LINE_BAUD, minimum=MIN_BAUD, maximum=MAX_BAUD),
         )
 
     pitch_min_deg, pitch_max_deg = limits.interval("pitch_deg")
@@ -210,4 +217,5 @@ def read_rig_file(path: str | Path) -> RigDescription:
             flapping_frequency_max_hz=frequency_max,
             max_motor_rpm=limits.number("max_motor_rpm", positive=True),
         ),
+        simulator_control=simulator_control,
     )

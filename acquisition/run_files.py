@@ -13,6 +13,8 @@ from ornitail.acquisition.recording_layout import (
     SetPointRecord,
 )
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import read_input_text
+from ornitail.core.input_files import read_json_file as read_json_document
 
 try:
     import fcntl
@@ -50,12 +52,7 @@ def write_json_atomically(path: Path, values: dict[str, Any]) -> None:
 
 def read_json_file(path: Path) -> dict[str, Any]:
     """Read a JSON object; a missing or malformed file is a :class:`UserInputError`."""
-    try:
-        values = json.loads(Path(path).read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise UserInputError(str(path), "file not found") from None
-    except (OSError, json.JSONDecodeError) as error:
-        raise UserInputError(str(path), f"not readable JSON ({error})") from None
+    values = read_json_document(path)  # bounded, UTF-8, finite numbers (core/input_files.py)
     if not isinstance(values, dict):
         raise UserInputError(str(path), "top level is not a JSON object")
     return values
@@ -78,10 +75,9 @@ def read_journal(run_directory: Path) -> list[SetPointRecord]:
     set point was completed.
     """
     path = Path(run_directory) / JOURNAL_FILE_NAME
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
+    if not path.exists() and not path.is_symlink():
         return []
+    text = read_input_text(path)
     lines = text.split("\n")
     records = []
     for line_number, line in enumerate(lines, start=1):
@@ -90,7 +86,7 @@ def read_journal(run_directory: Path) -> list[SetPointRecord]:
         is_last_line = line_number == len(lines)
         try:
             records.append(SetPointRecord.from_json_dict(json.loads(line)))
-        except (json.JSONDecodeError, TypeError) as error:
+        except (json.JSONDecodeError, TypeError, KeyError, ValueError, AttributeError) as error:
             if is_last_line:  # torn final write of a crashed process: the set point was not done
                 break
             raise UserInputError(

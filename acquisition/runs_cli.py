@@ -11,9 +11,11 @@ import click
 
 from ornitail.acquisition.catalog import (
     DATA_ROOT_ENVIRONMENT_VARIABLE,
+    CatalogEntry,
     RunCatalog,
     RunFilter,
     default_data_root,
+    run_file_problems,
 )
 from ornitail.core.errors import UserInputError
 from ornitail.core.output import emit, json_option
@@ -30,6 +32,7 @@ _TABLE_COLUMNS = (
     ("set_pts", 7),
     ("lost", 8),
     ("crc", 5),
+    ("sat_pts", 7),
 )
 
 
@@ -56,13 +59,19 @@ def parse_since(text: str) -> datetime:
 
 
 def _lost_samples(run: dict[str, Any]) -> int:
-    return run["queue_lost_samples"] + run["link_lost_samples"] + run["counter_missing_samples"]
+    """Samples lost, each once: those the sample counters say are missing in the run's file (queue and link
+    losses are causes of these, not additions to them)."""
+    return run["lost_samples"]
 
 
 def _render_table(result: dict[str, Any]) -> str:
     runs = result["runs"]
+    unreadable = [
+        f"unreadable run: {item['run_directory']}: {item['problem']}"
+        for item in result.get("unreadable", [])
+    ]
     if not runs:
-        return "no runs match"
+        return "\n".join(["no runs match", *unreadable])
     header = " ".join(f"{name:<{width}}" for name, width in _TABLE_COLUMNS).rstrip()
     lines = [header, "-" * len(header)]
     for run in runs:
@@ -79,13 +88,30 @@ def _render_table(result: dict[str, Any]) -> str:
             str(run["set_point_count"]),
             str(_lost_samples(run)),
             str(run["crc_errors"]),
+            str(run["saturated_set_points"]),
         )
         widths = [width for _, width in _TABLE_COLUMNS]
         row = " ".join(f"{cell:<{w}}" for cell, w in zip(cells, widths, strict=True))
         lines.append(row.rstrip())
+        if run.get("problems"):
+            lines.append(
+                f"    damaged (recorded as {run['recorded_exit_status']}): "
+                + "; ".join(run["problems"])
+            )
         if run["failure_reason"] and run["exit_status"] != "completed":
             lines.append(f"    reason: {run['failure_reason']}")
-    return "\n".join(lines)
+        if run["saturated_set_points"]:
+            lines.append(
+                f"    saturation: {run['saturated_set_points']} set point(s): "
+                f"{run['saturated_samples']} samples at the ADC limit, {run['over_range_samples']} over "
+                "the sensor's rated load"
+            )
+        if run["garbage_bytes"] or run["foreign_frames"]:
+            lines.append(
+                f"    link: {run['garbage_bytes']} garbage bytes in {run['resyncs']} resync(s), "
+                f"{run['foreign_frames']} foreign CAN frame(s)"
+            )
+    return "\n".join([*lines, *unreadable])
 
 
 @click.command("runs")
@@ -102,7 +128,7 @@ def _render_table(result: dict[str, Any]) -> str:
 @click.option(
     "--status",
     default=None,
-    help="completed, aborted, failed, crashed or running.",
+    help="completed, incomplete, aborted, failed, crashed or running.",
 )
 @click.option("--since", "since_text", default=None, help="Runs started at or after (ISO 8601).")
 @json_option
@@ -115,7 +141,9 @@ def runs_command(
     since_text: str | None,
     as_json: bool,
 ) -> None:
-    """List recorded runs, oldest first; runs whose process died are shown as crashed."""
+    """List recorded runs, oldest first; runs whose process died are shown as crashed. The catalog is first
+    brought up to date from the run directories; if another process keeps it locked, the runs are listed as
+    their directories say and a note on stderr says so."""
     run_filter = RunFilter(
         tail_id=tail_id,
         x_h_m=None if x_h_mm_text is None else parse_x_h_mm(x_h_mm_text),
@@ -125,6 +153,35 @@ def runs_command(
     )
     run_filter.validate()
     catalog = RunCatalog(data_root if data_root is not None else default_data_root())
-    catalog.reconcile()
-    runs = [entry.to_json_dict() for entry in catalog.find_runs(run_filter)]
-    emit({"runs": runs}, as_json, _render_table)
+    entries, report = catalog.runs_reconciled(run_filter)
+    if report.write_error is not None:
+        click.echo(
+            f"ornitail: note: the catalog {catalog.path} is locked by another process "
+            f"({report.write_error}); {len(report.unwritten_entries)} run(s) listed from their run "
+            "directories, the catalog catches up on the next `ornitail runs`",
+            err=True,
+        )
+    runs = [_with_file_problems(catalog.data_root, entry) for entry in entries]
+    unreadable = [
+        {
+            "run_directory": directory,
+            "problem": report.unreadable_reasons.get(directory, "unreadable"),
+        }
+        for directory in report.unreadable_run_directories
+    ]
+    result: dict[str, Any] = {"runs": runs}
+    if unreadable:  # run directories whose run.json cannot be read are listed, never hidden
+        result["unreadable"] = unreadable
+    emit(result, as_json, _render_table)
+
+
+def _with_file_problems(data_root: Path, entry: CatalogEntry) -> dict[str, Any]:
+    """The entry's JSON record; a run whose files are damaged (samples file gone) is listed with
+    ``exit_status`` ``"damaged"``, its recorded status in ``recorded_exit_status`` and ``problems``."""
+    run = entry.to_json_dict()
+    problems = run_file_problems(data_root, entry)
+    run["problems"] = problems
+    if problems:
+        run["recorded_exit_status"] = run["exit_status"]
+        run["exit_status"] = "damaged"
+    return run

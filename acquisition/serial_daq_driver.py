@@ -23,7 +23,7 @@ import termios
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import serial
@@ -34,18 +34,33 @@ from ornitail.acquisition.daq_protocol import (
     STOP_MARKER,
     DaqFrameParser,
     DaqIdentity,
+    DecodedFrames,
     StreamStatistics,
     counts_to_volts,
     link_ceiling_frames_per_s,
     parse_identity,
+    saturated_rows,
 )
+from ornitail.acquisition.exclusive_locks import ExclusiveLock
 from ornitail.acquisition.instrument_errors import InstrumentDisconnected, InstrumentReplyError
+from ornitail.acquisition.serial_port_access import (
+    close_quietly,
+    drain_until_quiet,
+    open_serial_exclusively,
+    printable_excerpt,
+)
 from ornitail.core.errors import UserInputError, require_finite
 
 # Parse when this much has arrived or this long has passed: bigger buffers cost less numpy overhead
 # per frame (about 100 frames per parse at 10 kHz) while keeping latency near 10 ms.
 PARSE_AT_BYTES = 4096
 PARSE_INTERVAL_S = 0.01
+OPEN_QUIET_S = 0.25
+"""On open, a board that sends nothing (not even the stop marker) for this long is taken as stopped, s."""
+OPEN_QUIET_AFTER_STOP_S = 0.05
+"""On open, once the stop marker arrived the line must stay quiet this long, s."""
+OPEN_DRAIN_LIMIT_S = 10.0
+"""On open, a board still streaming this long after ``STOP`` is an error, s (a full 1 MB FIFO at 4 Mbaud: 2.5 s)."""
 
 
 @dataclass
@@ -54,12 +69,14 @@ class DaqBlock:
 
     counters : (n,) uint32 board sample counters. volts : (n, 9) float64 in
     ``daq_protocol.CHANNEL_NAMES`` order, V (Hall: 0 V or the logic-high V). host_time_s :
-    ``time.monotonic()`` when the block was parsed (arrival, not sampling, time).
+    ``time.monotonic()`` when the block was parsed (arrival, not sampling, time). saturated : (n,) bool,
+    the board's over-range status bit or an analog channel at -32768 / +32767 counts (None: not known).
     """
 
     counters: np.ndarray
     volts: np.ndarray
     host_time_s: float
+    saturated: np.ndarray | None = field(default=None)
 
 
 class SerialDaqDriver:
@@ -107,6 +124,8 @@ class SerialDaqDriver:
         self.blocks_dropped = 0
         self._reply_timeout_s = reply_timeout_s
         self._serial: serial.Serial | None = None
+        self._port_lock: ExclusiveLock | None = None
+        self.stale_bytes_discarded = 0
         self._parser = DaqFrameParser()
         self._reader: threading.Thread | None = None
         self._stop_requested = threading.Event()
@@ -117,24 +136,67 @@ class SerialDaqDriver:
 
     # -- connection -------------------------------------------------------------------------
     def open(self) -> DaqIdentity:
-        """Open the port, check the board answers ``ID?``, and return its identity."""
+        """Open the port exclusively, bring the board to a known state, check it answers ``ID?``.
+
+        A board may still be streaming (its host crashed or was killed without ``STOP``): the driver sends
+        ``STOP``, drains the stream up to the board's stop marker and until the line is quiet (at most
+        ``OPEN_DRAIN_LIMIT_S``), and only then asks ``ID?``. Binary bytes never reach an error message.
+
+        Raises
+        ------
+        InstrumentInUse
+            Another process (or connection) has the port.
+        InstrumentDisconnected
+            The port cannot be opened, fails, or the board keeps streaming after ``STOP``.
+        InstrumentReplyError
+            The board does not identify itself.
+        """
+        self._serial, self._port_lock = open_serial_exclusively(self.port, self.baud, self.name)
         try:
-            self._serial = serial.Serial(self.port, self.baud, timeout=0.05, write_timeout=1.0)
-        except (OSError, ValueError) as error:
-            raise InstrumentDisconnected(self.name, f"cannot open {self.port}: {error}") from None
-        self._serial.reset_input_buffer()
-        self.identity = self.identify()
+            self._stop_stream_left_running()
+            try:
+                self.identity = self.identify()
+            except (
+                InstrumentReplyError
+            ):  # a late byte slipped in: quiet the line once more, ask again
+                self._stop_stream_left_running()
+                self.identity = self.identify()
+        except BaseException:
+            self.close()
+            raise
         return self.identity
 
+    def _stop_stream_left_running(self) -> None:
+        """Send ``STOP`` (after a newline that ends any half-written command) and drain until quiet."""
+        port = self._port()
+        try:
+            port.write(b"\nSTOP\n")
+            drained = drain_until_quiet(
+                port,
+                quiet_s=OPEN_QUIET_S,
+                quiet_after_marker_s=OPEN_QUIET_AFTER_STOP_S,
+                limit_s=OPEN_DRAIN_LIMIT_S,
+                marker=STOP_MARKER,
+            )
+            port.reset_input_buffer()
+        except (OSError, termios.error) as error:
+            raise InstrumentDisconnected(self.name, f"port {self.port} failed: {error}") from None
+        self.stale_bytes_discarded += drained.bytes_discarded
+        if not drained.quiet:
+            raise InstrumentDisconnected(
+                self.name,
+                f"still sending data {OPEN_DRAIN_LIMIT_S:g} s after STOP on {self.port} "
+                f"({drained.bytes_discarded} bytes); power-cycle the board",
+            )
+
     def close(self) -> None:
-        """Stop streaming if needed and close the port; safe to call twice or after a failure."""
+        """Stop streaming if needed, close the port and release its lock; safe to call twice or after a failure."""
         if self._reader is not None:
             with contextlib.suppress(InstrumentDisconnected):
                 self.stop()
-        if self._serial is not None:
-            with contextlib.suppress(OSError):
-                self._serial.close()
-            self._serial = None
+        serial_port, self._serial = self._serial, None
+        port_lock, self._port_lock = self._port_lock, None
+        close_quietly(serial_port, port_lock)
 
     def __enter__(self) -> SerialDaqDriver:
         self.open()
@@ -171,7 +233,10 @@ class SerialDaqDriver:
             )
         text = reply.decode("ascii", errors="replace").strip()
         if text.startswith("ERR"):
-            raise InstrumentReplyError(self.name, f"refused {command!r}: {text[3:].strip()}")
+            raise InstrumentReplyError(
+                self.name,
+                f"refused {command!r}: {printable_excerpt(text[3:].strip(), quote=False)}",
+            )
         return text
 
     def identify(self) -> DaqIdentity:
@@ -181,7 +246,9 @@ class SerialDaqDriver:
             return parse_identity(reply)
         except (ValueError, KeyError) as error:
             raise InstrumentReplyError(
-                self.name, f"malformed ID reply {reply!r}: {error}"
+                self.name,
+                f"malformed reply to 'ID?' on {self.port}: {printable_excerpt(reply)} "
+                f"({printable_excerpt(str(error), quote=False)})",
             ) from None
 
     def link_ceiling_hz(self) -> float:
@@ -312,8 +379,13 @@ class SerialDaqDriver:
             with contextlib.suppress(queue.Full):
                 self.blocks.put_nowait(None)
 
-    def _publish(self, decoded, identity: DaqIdentity) -> None:
+    def _publish(self, decoded: DecodedFrames, identity: DaqIdentity) -> None:
         if len(decoded):
             self._deliver(
-                DaqBlock(decoded.counters, counts_to_volts(decoded, identity), time.monotonic())
+                DaqBlock(
+                    decoded.counters,
+                    counts_to_volts(decoded, identity),
+                    time.monotonic(),
+                    saturated_rows(decoded),
+                )
             )

@@ -8,7 +8,10 @@ If the driver does not read, the pty buffer fills and the board drops samples it
 counters then show the gap), as a real board's FIFO would.
 
 Fault injection (for tests): :meth:`inject_garbage`, :meth:`truncate_next_frame`,
-:meth:`drop_samples`, :meth:`corrupt_next_crc`, :meth:`unplug`. Each acts on the next block written.
+:meth:`drop_samples`, :meth:`corrupt_next_crc`, :meth:`unplug` act on the next block written;
+:meth:`hold_gauge_at_rail` (a channel stuck at the ADC limit, over-range bit set) and
+:meth:`drop_periodically` (an overloaded link losing samples) start with the next block and last for a
+number of samples or until released.
 """
 
 from __future__ import annotations
@@ -19,6 +22,8 @@ from collections import deque
 import numpy as np
 
 from ornitail.acquisition.daq_protocol import (
+    ADC_COUNT_MAX,
+    ADC_COUNT_MIN,
     ADC_RANGE_V,
     CHANNEL_NAMES,
     DEFAULT_BAUD,
@@ -91,6 +96,11 @@ class SimulatedDaqBoard(SimulatedDevice):
         self._lock = threading.Lock()
         self._faults: deque[tuple[str, int | bytes]] = deque()
         self._unplug_requested = threading.Event()
+        # channel -> [samples left (None: until released), counts held]; applied from the next block on
+        self._rail_holds: dict[int, list[int | None]] = {}
+        # (every n samples taken, drop the first k of them)
+        self._periodic_drop: tuple[int, int] | None = None
+        self._samples_taken = 0
         self._prepare_thread("simulated DAQ board")
         self._streaming = False
         self._next_counter = 0
@@ -125,6 +135,38 @@ class SimulatedDaqBoard(SimulatedDevice):
     def unplug(self) -> None:
         """Close the pty master: the driver's port fails as if the USB cable were pulled."""
         self._unplug_requested.set()
+
+    def hold_gauge_at_rail(
+        self, channel: int, samples: int | None = None, high: bool = True
+    ) -> None:
+        """Hold analog channel ``channel`` (0..7) at +32767 (``high``) or -32768 counts, with the over-range
+        status bit set, for the next ``samples`` samples taken (None: until :meth:`release_gauge`)."""
+        if not 0 <= channel < len(CHANNEL_NAMES) - 1:
+            raise ValueError(f"analog channel {channel} must be 0..{len(CHANNEL_NAMES) - 2}")
+        if samples is not None and samples < 1:
+            raise ValueError(f"samples {samples} must be at least 1")
+        with self._lock:
+            self._rail_holds[channel] = [samples, ADC_COUNT_MAX if high else ADC_COUNT_MIN]
+
+    def release_gauge(self, channel: int) -> None:
+        """End a :meth:`hold_gauge_at_rail` of ``channel`` from the next block on."""
+        with self._lock:
+            self._rail_holds.pop(channel, None)
+
+    def drop_periodically(self, every_samples: int, drop_samples: int) -> None:
+        """From the next block on, of every ``every_samples`` samples taken the first ``drop_samples`` are never
+        sent (counters keep counting them), until :meth:`stop_dropping`."""
+        if not 0 < drop_samples < every_samples:
+            raise ValueError(
+                f"need 0 < drop_samples ({drop_samples}) < every_samples ({every_samples})"
+            )
+        with self._lock:
+            self._periodic_drop = (int(every_samples), int(drop_samples))
+
+    def stop_dropping(self) -> None:
+        """End :meth:`drop_periodically` from the next block on."""
+        with self._lock:
+            self._periodic_drop = None
 
     @property
     def faults_pending(self) -> int:
@@ -216,10 +258,22 @@ class SimulatedDaqBoard(SimulatedDevice):
         with self._lock:
             faults = list(self._faults)
             self._faults.clear()
+            self._apply_rail_holds(counts, status)
+            periodic_drop = self._periodic_drop
         dropped = sum(int(value) for kind, value in faults if kind == "drop")
         if dropped:  # the skipped counters are simply never sent
             counters = counters + dropped
         self._next_counter = int(counters[-1]) + 1
+        taken = self._samples_taken + np.arange(due, dtype=np.int64)
+        self._samples_taken += due
+        if periodic_drop is not None:  # taken (counted) but never sent
+            every, drop = periodic_drop
+            sent = taken % every >= drop
+            counters, counts, status = counters[sent], counts[sent], status[sent]
+            self.samples_dropped_by_board += due - int(np.count_nonzero(sent))
+            due = int(np.count_nonzero(sent))
+            if due == 0:
+                return
         data = encode_frames(counters, counts, status)
         data = self._apply_faults(data, faults)
         if len(self._outgoing) > 1_000_000:  # pty full for a long time: board FIFO overflows
@@ -227,6 +281,18 @@ class SimulatedDaqBoard(SimulatedDevice):
             return
         self._outgoing += data
         self.samples_sent += due
+
+    def _apply_rail_holds(self, counts: np.ndarray, status: np.ndarray) -> None:
+        """Force held channels to their limit (with the over-range bit) in the first rows of this block."""
+        for channel, hold in list(self._rail_holds.items()):
+            left, value = hold
+            rows = len(counts) if left is None else min(int(left), len(counts))
+            counts[:rows, channel] = value
+            status[:rows] |= STATUS_BIT_OVERRANGE
+            if left is not None:
+                hold[0] = int(left) - rows
+                if hold[0] <= 0:
+                    del self._rail_holds[channel]
 
     def _apply_faults(self, data: bytes, faults: list[tuple[str, int | bytes]]) -> bytes:
         frames = bytearray(data)

@@ -12,19 +12,31 @@ never jumps; every set point is a range of rows in that stream. Stopping:
 - a ``KeyboardInterrupt`` (the second Ctrl-C) ends it at once, also as ``aborted``;
 - an instrument error (unplugged, no reply) ends it as ``failed`` with the instrument named.
 
+A point whose record still lost samples after ``MAX_RETAKES`` retakes is journalled as it is (with what it lost)
+and the sweep goes on; its run and the sweep end as ``incomplete`` naming it, and ``resume=True`` records it
+again. A record with saturated or over-range samples is kept, with a warning (processing refuses it).
+
 Whatever happens, motor and fan are brought to a safe state and every completed set point stays on disk.
 """
 
 from __future__ import annotations
 
+import functools
+import hashlib
+import json
 import math
+import re
 import threading
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from itertools import groupby
 from pathlib import Path
+from typing import Any, TypeVar
 
 from ornitail.acquisition.catalog import RunCatalog, RunFilter
+from ornitail.acquisition.daq_protocol import link_ceiling_frames_per_s
+from ornitail.acquisition.exclusive_locks import ExclusiveLock, LockHeld
 from ornitail.acquisition.instrument_errors import InstrumentError
 from ornitail.acquisition.live_balance import LiveBalance, balance_stream_layout
 from ornitail.acquisition.recorder import Recorder, RunAborted
@@ -33,8 +45,15 @@ from ornitail.acquisition.recording_layout import (
     SetPointRecord,
 )
 from ornitail.acquisition.rig import Rig
-from ornitail.acquisition.run_files import read_journal
-from ornitail.acquisition.sweep_plan import SetPoint, SettleCriteria, SweepPlan, limit_violations
+from ornitail.acquisition.run_files import read_journal, run_is_live
+from ornitail.acquisition.sweep_plan import (
+    SetPoint,
+    SettleCriteria,
+    SweepPlan,
+    limit_violations,
+    motor_rpm_violations,
+    sample_rate_violation,
+)
 from ornitail.core.errors import UserInputError
 
 RECORD_START_DELAY_S = 0.1
@@ -72,13 +91,17 @@ class SweepEvent:
     Attributes
     ----------
     stage : str
-        ``"moving"``, ``"settled"``, ``"recorded"`` or ``"tail_change"``.
+        ``"moving"``, ``"settled"``, ``"recorded"``, ``"tail_change"`` or ``"warning"`` (a recorded point the
+        operator must know about: samples saturated or over the rated load, or samples still lost after the
+        retakes; ``message`` is one line naming it).
     set_point : SetPoint or None
         The point concerned.
     completed, total : int
         Set points done (including those of earlier runs of a resumed sweep) and in the plan.
     eta_s : float
         Estimated rig time left, seconds.
+    message : str
+        The warning line (``"warning"`` events only).
     """
 
     stage: str
@@ -86,6 +109,7 @@ class SweepEvent:
     completed: int
     total: int
     eta_s: float
+    message: str = ""
 
 
 @dataclass
@@ -95,13 +119,19 @@ class SweepResult:
     Attributes
     ----------
     status : str
-        ``"completed"``, ``"aborted"`` or ``"failed"`` (the last with ``message`` naming the cause).
+        ``"completed"``, ``"incomplete"`` (every point visited, but ``incomplete_points`` still lost samples
+        after their retakes: ``resume=True`` records them again), ``"aborted"`` or ``"failed"`` (the last
+        with ``message`` naming the cause).
     run_directories : list of pathlib.Path
         Every run of the sweep's chain, oldest first (earlier runs of a resumed sweep included).
     completed_points, total_points : int
         Set points recorded so far in the chain, and in the plan.
     message : str
         One line for the operator.
+    incomplete_points : list of int
+        Plan indices of the points whose kept record lost samples (not counted in ``completed_points``).
+    warnings : list of str
+        One line per recorded point with saturated or over-range samples, or still lossy.
     """
 
     status: str
@@ -109,17 +139,39 @@ class SweepResult:
     completed_points: int = 0
     total_points: int = 0
     message: str = ""
+    incomplete_points: list[int] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
 
 
 def check_plan_against_rig(plan: SweepPlan, rig: Rig) -> None:
-    """Raise :class:`UserInputError` listing every set point outside the rig's limits."""
+    """Raise :class:`UserInputError` listing every set point outside the rig's limits.
+
+    Checked before anything connects or moves: pitch, velocity and frequency limits, the motor rpm
+    every flapping frequency needs (f * 60 * gear ratio <= ``[limits].max_motor_rpm``) and the
+    sample rate the balance board can do at the rig's baud rate.
+    """
+    description = rig.description
     violations = limit_violations(plan, rig.set_point_limits())
+    violations += motor_rpm_violations(
+        plan,
+        description.gear_ratio,
+        description.limits.max_motor_rpm,
+        description.limits.flapping_frequency_max_hz,
+    )
+    rate_problem = sample_rate_violation(
+        plan, link_ceiling_frames_per_s(description.serial_daq.baud)
+    )
+    problems = [rate_problem] if rate_problem is not None else []
     if violations:
-        raise UserInputError(
-            plan.source,
-            f"{len(violations)} set point(s) outside the rig's limits ({rig.description.path}): "
+        problems.insert(
+            0,
+            f"{len(violations)} set point(s) outside the rig's limits ({description.path}): "
             + "; ".join(violations),
         )
+    elif problems:
+        problems[0] += f" ({description.path})"
+    if problems:
+        raise UserInputError(plan.source, "; ".join(problems))
     if rig.description.balance_route != "serial_daq":
         raise UserInputError(
             f"{rig.description.path}: [balance].route",
@@ -129,12 +181,13 @@ def check_plan_against_rig(plan: SweepPlan, rig: Rig) -> None:
 
 
 def previous_sweep_chain(catalog: RunCatalog, plan: SweepPlan) -> list[Path]:
-    """Run directories of the newest sweep of ``plan`` (same plan name, tail and x_h), oldest first."""
-    runs = [
-        run
-        for run in catalog.find_runs(RunFilter(tail_id=plan.tail_id, x_h_m=plan.x_h_m))
-        if run.plan_name == plan.name
-    ]
+    """Run directories of the newest sweep of ``plan`` (same plan name, tail and x_h), oldest first.
+
+    The catalog is reconciled with the run directories first, so a run whose catalog row is stale or missing
+    (the catalog was locked while it recorded) is found as its ``run.json`` says.
+    """
+    matching, _ = catalog.runs_reconciled(RunFilter(tail_id=plan.tail_id, x_h_m=plan.x_h_m))
+    runs = [run for run in matching if run.plan_name == plan.name]
     if not runs:
         return []
     by_id = {run.run_id: run for run in runs}
@@ -146,12 +199,111 @@ def previous_sweep_chain(catalog: RunCatalog, plan: SweepPlan) -> list[Path]:
 
 
 def completed_plan_points(run_directories: Iterable[Path]) -> set[int]:
-    """Plan indices of the set points journalled as completed in these runs."""
+    """Plan indices of the set points journalled with a whole record in these runs (a record that still lost
+    samples after its retakes does not count: a resume records that point again)."""
     return {
         record.plan_point_index
         for directory in run_directories
         for record in read_journal(Path(directory))
+        if record.samples_missing_in_record == 0
     }
+
+
+class SweepChainBusy(UserInputError):
+    """Another process (or thread) is recording this plan's chain of runs; the message names it."""
+
+
+SWEEP_LOCK_FOLDER = "locks"
+"""Folder under the data root that holds one lock file per chain of runs (plan name, tail, x_h)."""
+_chains_held: dict[Path, tuple[int, int]] = {}  # lock path -> (owning thread id, nesting depth)
+_chains_held_guard = threading.Lock()
+
+
+def sweep_chain_lock_path(data_root: Path, plan: SweepPlan) -> Path:
+    """The lock file of the chain of runs of ``plan`` (same plan name, tail and x_h) under ``data_root``."""
+    key = json.dumps([plan.name, plan.tail_id, round(plan.x_h_m, 9)])
+    digest = hashlib.sha256(key.encode("utf-8")).hexdigest()[:12]
+    slug = re.sub(r"[^A-Za-z0-9._-]+", "_", plan.name).strip("_.")[:40] or "plan"
+    return Path(data_root) / SWEEP_LOCK_FOLDER / f"sweep-{slug}-{digest}.lock"
+
+
+def _chain_busy_message(data_root: Path, plan: SweepPlan, held: LockHeld) -> str:
+    holder = held.holder.describe() if held.holder else "another process"
+    live: list[str] = []
+    try:
+        live = [
+            directory.name
+            for directory in previous_sweep_chain(RunCatalog(data_root), plan)
+            if run_is_live(directory)
+        ]
+    except Exception:  # the catalog is busy or unreadable: name the process only
+        live = []
+    run = f"run {live[-1]}" if live else "no run open at this moment (between runs)"
+    stop_hint = f"`kill -TERM {held.holder.pid}`" if held.holder and held.holder.pid else "Ctrl-C"
+    return (
+        f"sweep {plan.name!r} (tail {plan.tail_id}, x_h {plan.x_h_m * 1000:g} mm) is being recorded by "
+        f"{holder}: {run} in {Path(data_root) / 'runs'}; wait for it to end or stop it ({stop_hint}) "
+        "before starting or resuming it"
+    )
+
+
+@contextmanager
+def holding_sweep_chain(data_root: Path, plan: SweepPlan) -> Iterator[None]:
+    """Hold the chain lock of ``plan`` under ``data_root`` for the block (re-entrant within one thread).
+
+    Raises
+    ------
+    SweepChainBusy
+        Another process or thread holds it (a sweep or a ``--resume`` of the same chain is running); the
+        message names the process and the run it records.
+    """
+    path = sweep_chain_lock_path(data_root, plan).resolve()
+    me = threading.get_ident()
+    with _chains_held_guard:
+        owner, depth = _chains_held.get(path, (None, 0))
+        if owner == me:
+            _chains_held[path] = (me, depth + 1)
+            nested = True
+        else:
+            nested = False
+    if nested:
+        try:
+            yield
+        finally:
+            with _chains_held_guard:
+                _chains_held[path] = (me, _chains_held[path][1] - 1)
+        return
+    lock = ExclusiveLock(path)
+    try:
+        lock.acquire(
+            detail=f"sweep {plan.name} (tail {plan.tail_id}, x_h {plan.x_h_m * 1000:g} mm)"
+        )
+    except LockHeld as held:
+        raise SweepChainBusy(str(plan.source), _chain_busy_message(data_root, plan, held)) from None
+    with _chains_held_guard:
+        _chains_held[path] = (me, 1)
+    try:
+        yield
+    finally:
+        with _chains_held_guard:
+            _chains_held.pop(path, None)
+        lock.release()
+
+
+_Sweep = TypeVar("_Sweep", bound=Callable[..., "SweepResult"])
+
+
+def _holding_the_chain(sweep: _Sweep) -> _Sweep:
+    """Run ``sweep(plan, rig, data_root, ...)`` holding the plan's chain lock (see :func:`holding_sweep_chain`)."""
+
+    @functools.wraps(sweep)
+    def locked(
+        plan: SweepPlan, rig: Rig, data_root: Path, *args: Any, **kwargs: Any
+    ) -> SweepResult:
+        with holding_sweep_chain(Path(data_root), plan):
+            return sweep(plan, rig, data_root, *args, **kwargs)
+
+    return locked  # type: ignore[return-value]
 
 
 @dataclass
@@ -163,6 +315,8 @@ class _SweepContext:
     completed: int
     stream: LiveBalance
     durations_s: list[float] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    lossy_points: dict[int, str] = field(default_factory=dict)  # plan index -> what it lost
 
     def eta_s(self) -> float:
         remaining = (
@@ -175,10 +329,17 @@ class _SweepContext:
         )
         return typical_s * len(remaining)
 
-    def emit(self, stage: str, point: SetPoint | None) -> None:
+    def emit(self, stage: str, point: SetPoint | None, message: str = "") -> None:
         self.on_event(
-            SweepEvent(stage, point, self.completed, len(self.plan.set_points), self.eta_s())
+            SweepEvent(
+                stage, point, self.completed, len(self.plan.set_points), self.eta_s(), message
+            )
         )
+
+    def warn(self, point: SetPoint, line: str) -> None:
+        """Keep ``line`` for the result and pass it on as a ``"warning"`` event."""
+        self.warnings.append(line)
+        self.emit("warning", point, line)
 
 
 def _move(rig: Rig, point: SetPoint) -> None:
@@ -272,7 +433,7 @@ def _record_point(
     Rows still in transit (pty, driver queue) when the point settled were sampled before it settled; the board's
     counter, not the arrival order, decides where the point begins. A record with samples lost inside it (counter
     gaps: an overloaded link) is taken again, up to ``MAX_RETAKES`` times; what the kept record lost is journalled
-    as ``samples_missing_in_record``.
+    as ``samples_missing_in_record``. The recorder fills in the record's saturated and over-range row counts.
     """
     count = int(round(point.record_s * sample_rate_hz))
     retakes = 0
@@ -346,15 +507,50 @@ def _run_tail_state(
                 _move(rig, point)
                 settle_s = _settle(rig, point, plan.settle, stream)
                 context.emit("settled", point)
-                _record_point(rig, recorder, stream, point, plan.sample_rate_hz, settle_s)
-                context.completed += 1
+                record = _record_point(rig, recorder, stream, point, plan.sample_rate_hz, settle_s)
+                if record.samples_missing_in_record:
+                    context.lossy_points[point.index] = (
+                        f"set point {point.label} lost {record.samples_missing_in_record} samples "
+                        f"inside its record after {MAX_RETAKES} retakes"
+                    )
+                else:
+                    context.lossy_points.pop(point.index, None)
+                    context.completed += 1
                 context.durations_s.append(rig.now_s() - started_s)
                 context.emit("recorded", point)
+                _warn_about_record(context, point, record)
+            lossy = [
+                context.lossy_points[p.index] for p in points if p.index in context.lossy_points
+            ]
+            if lossy:
+                recorder.mark_incomplete(
+                    "; ".join(lossy) + "; `ornitail sweep --resume` records these points again"
+                )
         finally:
             stream.detach()
         return recorder.run_id
 
 
+def _warn_about_record(context: _SweepContext, point: SetPoint, record: SetPointRecord) -> None:
+    """One warning line for a record with saturated or over-range rows, one for a record still lossy."""
+    rows = record.last_sample_index - record.first_sample_index + 1
+    if record.is_flagged:
+        context.warn(
+            point,
+            f"warning: set point {point.label}: {record.saturated_samples} of {rows} samples saturated (a "
+            f"channel at the ADC limit or the board's over-range flag), {record.over_range_samples} over the "
+            "balance's rated load; `ornitail process` refuses this point",
+        )
+    if record.samples_missing_in_record:
+        context.warn(
+            point,
+            f"warning: set point {point.label}: {record.samples_missing_in_record} of {rows} samples still "
+            f"lost inside the record after {MAX_RETAKES} retakes; the run ends incomplete and "
+            "`ornitail sweep --resume` records the point again",
+        )
+
+
+@_holding_the_chain
 def run_sweep(
     plan: SweepPlan,
     rig: Rig,
@@ -441,7 +637,16 @@ def run_sweep(
                     result.status, result.message = "failed", str(error)
         rig.safe_state()
         result.completed_points = context.completed
-    if result.status == "completed":
+        result.warnings = list(context.warnings)
+        result.incomplete_points = sorted(context.lossy_points)
+    if result.status == "completed" and result.incomplete_points:
+        result.status = "incomplete"
+        result.message = (
+            f"recorded {result.completed_points} of {result.total_points} set points; "
+            + "; ".join(context.lossy_points[index] for index in result.incomplete_points)
+            + "; run the sweep again with --resume to record them"
+        )
+    elif result.status == "completed":
         result.message = f"recorded {result.completed_points} of {result.total_points} set points"
     return result
 

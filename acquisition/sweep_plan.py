@@ -10,16 +10,45 @@ moves. The file format is in ``docs/sweep-plan.md``.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import read_toml_file
 from ornitail.core.toml_table import TomlTable, is_finite_number
 
 SweepVariable = Literal["theta", "velocity", "frequency"]
 TaillessPoints = Literal["none", "steady_state", "all"]
+
+# Bounds a plan must keep (docs/sweep-plan.md, "Bounds"); checked before any set point is expanded,
+# so a typo cannot make a plan that never ends or exhausts memory.
+MAX_RECORD_S = 600.0
+"""Longest record per set point, s."""
+MAX_STABLE_FOR_S = 600.0
+"""Longest settle window, s."""
+MAX_TIMEOUT_S = 3600.0
+"""Longest settle timeout, s."""
+MAX_REPEATS = 1000
+"""Most repeats of a set point (steady state or sweep point)."""
+MAX_SWEEP_STEPS = 1000
+"""Most offsets on one side of a ``{span, steps}`` sweep, and most listed offsets / 2."""
+MAX_SET_POINTS = 10_000
+"""Most set points (tares included) in a plan."""
+MAX_DURATION_S = 24 * 3600.0
+"""Longest estimated sweep, s: set points x (record_s + stable_for_s), a lower bound."""
+MAX_ABS_THETA_DEG = 90.0
+"""Largest |pitch| of a steady state, deg."""
+MAX_VELOCITY_M_S = 100.0
+"""Largest free-stream velocity of a steady state, m/s."""
+MAX_FREQUENCY_HZ = 1000.0
+"""Largest flapping frequency of a steady state, Hz."""
+MAX_X_H_MM = 1000.0
+"""Largest tail position x_h, mm."""
+MIN_SAMPLE_RATE_HZ = 100.0
+"""Slowest balance sampling rate any board runs at, Hz."""
+MAX_SAMPLE_RATE_HZ = 100_000.0
+"""Fastest balance sampling rate accepted in a plan, Hz (the rig's board may allow less)."""
 
 
 @dataclass(frozen=True)
@@ -142,11 +171,15 @@ def _sweep_offsets(source: str, table: Any) -> dict[SweepVariable, tuple[float, 
         elif isinstance(spec, dict) and set(spec) == {"span", "steps"}:
             span_and_steps = TomlTable(source, f"sweeps.{key}", spec, {"span", "steps"})
             span = span_and_steps.number("span", positive=True)
-            steps = span_and_steps.integer("steps", minimum=1)
+            steps = span_and_steps.integer("steps", minimum=1, maximum=MAX_SWEEP_STEPS)
             values = [span * k / steps for k in range(-steps, steps + 1) if k != 0]
         else:
             raise UserInputError(
                 where, "must be a list of offsets or a table {span = ..., steps = ...}"
+            )
+        if len(values) > 2 * MAX_SWEEP_STEPS:
+            raise UserInputError(
+                where, f"{len(values)} offsets; at most {2 * MAX_SWEEP_STEPS} are allowed"
             )
         for value in values:
             if not is_finite_number(value):
@@ -160,14 +193,7 @@ def _sweep_offsets(source: str, table: Any) -> dict[SweepVariable, tuple[float, 
 def load_plan(path: str | Path) -> SweepPlan:
     """Read and check a plan file; every mistake is a :class:`UserInputError` naming the field."""
     path = Path(path)
-    source = str(path)
-    try:
-        document = tomllib.loads(path.read_text())
-    except OSError as error:
-        raise UserInputError(source, f"cannot read plan ({error.strerror or error})") from None
-    except tomllib.TOMLDecodeError as error:
-        raise UserInputError(source, f"not valid TOML ({error})") from None
-    return plan_from_document(document, source)
+    return plan_from_document(read_toml_file(path), str(path))
 
 
 def plan_from_document(document: dict[str, Any], source: str = "<plan>") -> SweepPlan:
@@ -223,28 +249,49 @@ def plan_from_document(document: dict[str, Any], source: str = "<plan>") -> Swee
         frequency_tolerance_hz=settle_table.number(
             "frequency_tolerance_hz", defaults.frequency_tolerance_hz, positive=True
         ),
-        stable_for_s=settle_table.number("stable_for_s", defaults.stable_for_s, minimum=0.0),
-        timeout_s=settle_table.number("timeout_s", defaults.timeout_s, positive=True),
+        stable_for_s=_at_most(
+            settle_table,
+            "stable_for_s",
+            settle_table.number("stable_for_s", defaults.stable_for_s, minimum=0.0),
+            MAX_STABLE_FOR_S,
+        ),
+        timeout_s=_at_most(
+            settle_table,
+            "timeout_s",
+            settle_table.number("timeout_s", defaults.timeout_s, positive=True),
+            MAX_TIMEOUT_S,
+        ),
     )
     plan = SweepPlan(
         name=plan_table.text("name", default=Path(source).stem),
         tail_id=configuration.text("tail_id"),
-        x_h_m=configuration.number("x_h_mm", positive=True) / 1000.0,
-        theta0_rad=math.radians(steady.number("theta_deg")),
-        velocity0_m_s=steady.number("v_m_s", minimum=0.0),
-        frequency0_hz=steady.number("f_hz", positive=True),
+        x_h_m=_within(configuration, "x_h_mm", 0.0, MAX_X_H_MM, "mm", positive=True) / 1000.0,
+        theta0_rad=math.radians(
+            _within(steady, "theta_deg", -MAX_ABS_THETA_DEG, MAX_ABS_THETA_DEG, "deg")
+        ),
+        velocity0_m_s=_within(steady, "v_m_s", 0.0, MAX_VELOCITY_M_S, "m/s"),
+        frequency0_hz=_within(steady, "f_hz", 0.0, MAX_FREQUENCY_HZ, "Hz", positive=True),
         sweep_offsets=_sweep_offsets(source, document.get("sweeps")),
-        steady_state_repeats=protocol.integer("steady_state_repeats", 3, minimum=1),
-        sweep_repeats=protocol.integer("sweep_repeats", 1, minimum=1),
+        steady_state_repeats=protocol.integer(
+            "steady_state_repeats", 3, minimum=1, maximum=MAX_REPEATS
+        ),
+        sweep_repeats=protocol.integer("sweep_repeats", 1, minimum=1, maximum=MAX_REPEATS),
         tailless_points=protocol.text(  # type: ignore[arg-type]
             "tailless_points", "steady_state", choices=("none", "steady_state", "all")
         ),
         wind_off_tares=protocol.boolean("wind_off_tares", True),
-        record_s=protocol.number("record_s", 2.0, positive=True),
+        record_s=_at_most(
+            protocol, "record_s", protocol.number("record_s", 2.0, positive=True), MAX_RECORD_S
+        ),
         sample_rate_hz=protocol.number("sample_rate_hz", 10_000.0, positive=True),
         settle=settle,
         source=source,
     )
+    if not MIN_SAMPLE_RATE_HZ <= plan.sample_rate_hz <= MAX_SAMPLE_RATE_HZ:
+        raise UserInputError(
+            protocol.where("sample_rate_hz"),
+            f"{plan.sample_rate_hz:g} Hz is outside {MIN_SAMPLE_RATE_HZ:g}..{MAX_SAMPLE_RATE_HZ:g} Hz",
+        )
     minimum_record_s = 5.0 / plan.frequency0_hz
     if plan.record_s < minimum_record_s:
         raise UserInputError(
@@ -252,7 +299,69 @@ def plan_from_document(document: dict[str, Any], source: str = "<plan>") -> Swee
             f"{plan.record_s} s holds fewer than 5 flapping cycles at f0 = {plan.frequency0_hz} Hz; "
             f"use at least {minimum_record_s:.2f} s",
         )
+    _check_size(plan)
     return _with_set_points(plan)
+
+
+def _within(
+    table: TomlTable, key: str, low: float, high: float, unit: str, positive: bool = False
+) -> float:
+    """A finite number of ``key`` in ``low..high`` (``positive``: above 0)."""
+    value = table.number(key, positive=positive)
+    if not low <= value <= high:
+        raise UserInputError(
+            table.where(key), f"{value:g} {unit} is outside {low:g}..{high:g} {unit}"
+        )
+    return value
+
+
+def _at_most(table: TomlTable, key: str, value: float, maximum: float) -> float:
+    """``value`` of ``key``, refused above ``maximum``."""
+    if value > maximum:
+        raise UserInputError(
+            table.where(key), f"{value:g} s is more than the {maximum:g} s allowed"
+        )
+    return value
+
+
+def set_point_count(plan: SweepPlan) -> int:
+    """How many set points (tares included) ``plan`` expands to, counted without expanding it."""
+    sweep_points = sum(len(offsets) for offsets in plan.sweep_offsets.values())
+    total = 0
+    for tail_attached in [True] if plan.tailless_points == "none" else [True, False]:
+        with_sweeps = tail_attached or plan.tailless_points == "all"
+        total += plan.steady_state_repeats
+        if with_sweeps:
+            total += sweep_points * plan.sweep_repeats
+        if plan.wind_off_tares:
+            pitch_offsets = plan.sweep_offsets.get("theta", ()) if with_sweeps else ()
+            total += len({plan.theta0_rad, *(plan.theta0_rad + o for o in pitch_offsets)})
+    return total
+
+
+def estimated_duration_s(plan: SweepPlan, point_count: int | None = None) -> float:
+    """A lower bound of a sweep's duration, s: set points x (record_s + stable_for_s)."""
+    count = set_point_count(plan) if point_count is None else point_count
+    return count * (plan.record_s + plan.settle.stable_for_s)
+
+
+def _check_size(plan: SweepPlan) -> None:
+    """Refuse a plan of more than :data:`MAX_SET_POINTS` points or longer than a day."""
+    count = set_point_count(plan)
+    if count > MAX_SET_POINTS:
+        raise UserInputError(
+            plan.source,
+            f"the plan has {count} set points, more than the {MAX_SET_POINTS} allowed "
+            "(fewer repeats or sweep steps)",
+        )
+    duration_s = estimated_duration_s(plan, count)
+    if duration_s > MAX_DURATION_S:
+        raise UserInputError(
+            plan.source,
+            f"the plan takes at least {duration_s / 3600:.1f} h ({count} set points x "
+            f"(record_s + stable_for_s)), more than the {MAX_DURATION_S / 3600:g} h allowed; "
+            "split it into several plans",
+        )
 
 
 def _measurements_for_tail_state(plan: SweepPlan, tail_attached: bool) -> list[dict[str, Any]]:
@@ -317,6 +426,41 @@ def _with_set_points(plan: SweepPlan) -> SweepPlan:
         for index, point in enumerate(ordered)
     )
     return SweepPlan(**{**plan.__dict__, "set_points": set_points})
+
+
+def motor_rpm_violations(
+    plan: SweepPlan,
+    gear_ratio: float,
+    max_motor_rpm: float,
+    frequency_limit_hz: float = math.inf,
+) -> list[str]:
+    """Set points whose flapping frequency the motor cannot reach, one line each (empty: none).
+
+    A frequency f needs motor rpm = f * 60 * ``gear_ratio``, at most ``max_motor_rpm``. Points above
+    ``frequency_limit_hz`` are left out (they are reported as outside the rig's frequency limits).
+    """
+    violations = []
+    for point in plan.set_points:
+        if point.flapping_frequency_hz > frequency_limit_hz:
+            continue
+        rpm = point.flapping_frequency_hz * 60.0 * gear_ratio
+        if rpm > max_motor_rpm:
+            violations.append(
+                f"set point #{point.index} ({point.sweep}): f = {point.flapping_frequency_hz:.3f} Hz "
+                f"needs {rpm:.0f} motor rpm (f * 60 * gear ratio {gear_ratio:g}), more than "
+                f"[limits].max_motor_rpm = {max_motor_rpm:g}"
+            )
+    return violations
+
+
+def sample_rate_violation(plan: SweepPlan, max_sample_rate_hz: float) -> str | None:
+    """Why the balance board cannot sample at the plan's rate, or None when it can."""
+    if MIN_SAMPLE_RATE_HZ <= plan.sample_rate_hz <= max_sample_rate_hz:
+        return None
+    return (
+        f"[protocol].sample_rate_hz = {plan.sample_rate_hz:g} Hz is outside what the balance "
+        f"board can do ({MIN_SAMPLE_RATE_HZ:g}..{max_sample_rate_hz:g} Hz at the rig's baud rate)"
+    )
 
 
 def limit_violations(plan: SweepPlan, limits: dict[str, tuple[float, float]]) -> list[str]:

@@ -12,6 +12,7 @@ import click
 from ornitail.acquisition.catalog import default_data_root
 from ornitail.balance.process_runs import newest_sweep_chain, process_runs
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import prepare_output_directory
 from ornitail.core.output import emit, json_option
 
 PROGRESS_DELAY_S = 1.0
@@ -83,19 +84,33 @@ def _render(result: dict[str, Any]) -> str:
     required=True,
     help="Folder for the tables (CSV, JSON) and figures (PNG, PDF).",
 )
+@click.option(
+    "--keep-saturated",
+    is_flag=True,
+    help="Process set points whose record or tare has samples at the ADC limit or over the sensor's "
+    "rated load (refused by default), flagged in the table and named in the warnings.",
+)
 @json_option
 def process_command(
-    runs: tuple[Path, ...], plan_name: str | None, data_root: Path | None, out: Path, as_json: bool
+    runs: tuple[Path, ...],
+    plan_name: str | None,
+    data_root: Path | None,
+    out: Path,
+    keep_saturated: bool,
+    as_json: bool,
 ) -> None:
     """Cycle-average recorded runs; write tail contribution, stability derivatives and figures."""
     if runs and plan_name:
         raise UserInputError("--plan", "give run directories or --plan, not both")
+    prepare_output_directory(out)
     run_directories = (
         newest_sweep_chain(data_root or default_data_root(), plan_name) if plan_name else list(runs)
     )
     progress = _DelayedProgress()
     try:
-        result = process_runs(run_directories, out, on_progress=progress)
+        result = process_runs(
+            run_directories, out, on_progress=progress, keep_saturated=keep_saturated
+        )
     finally:
         progress.close()
     for warning in result["warnings"]:

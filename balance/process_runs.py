@@ -28,9 +28,11 @@ from ornitail.balance.processing_plots import (
     tail_comparison_figure,
 )
 from ornitail.balance.sweep_table import (
+    SATURATION_COLUMNS,
     MeasuredSetPoint,
     frequency_check_warnings,
     measured_set_points,
+    saturation_warnings,
     table_of_points,
     tail_contribution,
 )
@@ -52,7 +54,7 @@ class _PlanIdentity:
 def newest_sweep_chain(data_root: Path, plan_name: str) -> list[Path]:
     """Run directories of the newest sweep of the plan called ``plan_name`` in the catalog, oldest first."""
     catalog = RunCatalog(Path(data_root))
-    runs = [run for run in catalog.find_runs() if run.plan_name == plan_name]
+    runs = [run for run in catalog.runs_reconciled()[0] if run.plan_name == plan_name]
     if not runs:
         raise UserInputError(
             "--plan", f"no runs of plan {plan_name!r} in the catalog of {Path(data_root)}"
@@ -136,6 +138,13 @@ def _process_configuration(
         written += save_figure(
             tail_comparison_figure(table, contribution, name), out / f"{slug}-tailed-vs-tailless"
         )
+    flagged = int((table[list(SATURATION_COLUMNS)] > 0).any(axis=1).sum())
+    if flagged:
+        record.setdefault("tail_statements", []).append(
+            f"FLAGGED: {flagged} set point(s) of {name} were kept with saturated or over-range samples "
+            "(--keep-saturated); their loads, and the contribution and derivatives computed from them, are "
+            "clipped, not measured."
+        )
     record["written"] = [str(path) for path in written]
     return record
 
@@ -144,8 +153,12 @@ def process_runs(
     run_directories: Sequence[Path | str],
     out: Path,
     on_progress: Callable[[int, int], None] | None = None,
+    keep_saturated: bool = False,
 ) -> dict[str, Any]:
     """Write every table and figure of ``ornitail process`` for these runs into ``out``; return the summary.
+
+    Records with saturated or over-range samples are refused unless ``keep_saturated``; then they are processed,
+    flagged in the table's saturation columns and named in ``warnings``.
 
     Returns
     -------
@@ -157,13 +170,14 @@ def process_runs(
     ------
     UserInputError
         If no runs are given, a directory is not a recording, a measurement has no tare, a calibration file is
-        missing or changed, or a record holds too few flapping cycles.
+        missing or changed, a record lost samples or (unless ``keep_saturated``) has saturated or over-range
+        samples, or a record holds too few flapping cycles.
     """
     if not run_directories:
         raise UserInputError(
             "runs", "no run directories given (pass run directories or --plan NAME)"
         )
-    points = measured_set_points(run_directories)
+    points = measured_set_points(run_directories, keep_saturated)
     if not points:
         raise UserInputError(
             ", ".join(str(path) for path in run_directories), "the runs hold no measured set points"
@@ -176,7 +190,7 @@ def process_runs(
     result: dict[str, Any] = {
         "runs": [str(path) for path in run_directories],
         "table_csv": str(table_path),
-        "warnings": frequency_check_warnings(table),
+        "warnings": saturation_warnings(table) + frequency_check_warnings(table),
         "configurations": [],
     }
     written = [str(table_path)]

@@ -4,19 +4,25 @@ Everything needed comes from the recordings themselves: the raw voltages, the se
 calibration file named in the run metadata (its content hash is checked) and the rig's tool transform. Each
 measurement uses the newest wind-off tare taken before it at the same pitch and tail state, searched across all
 runs of the sweep (a resumed sweep may have its tare in an earlier run).
+
+Records the data cannot support are refused, each in one line naming the run and the set point: a record with
+samples lost inside it (counter gaps), and a record with samples saturated at the ADC limit or over the sensor's
+rated load (``keep_saturated=True`` keeps those, flagged in the table). A lossy record that a later run of the
+same sweep chain (``resumed_from_run_id``) recorded again is replaced by the new record.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from ornitail.acquisition.counter_gaps import find_counter_gaps
+from ornitail.acquisition.recording_layout import SetPointRecord
 from ornitail.acquisition.recording_reader import Recording, load_recording
 from ornitail.balance.hall_cycles import HallEdgeSettings
 from ornitail.balance.point_loads import (
@@ -35,6 +41,12 @@ from ornitail.core.errors import UserInputError
 from ornitail.core.hashing import content_hash_of_file
 
 GAUGE_CHANNELS = tuple(f"gauge_{index}_v" for index in range(6))
+SATURATION_COLUMNS = (
+    "saturated_samples",
+    "over_range_samples",
+    "tare_saturated_samples",
+    "tare_over_range_samples",
+)
 BALANCE_RESOLUTION_N = 0.149e-3 * 9.80665
 """Nano-17 force resolution, 0.149 gram-force (domain.md section 3), N."""
 
@@ -61,6 +73,7 @@ def balance_calibration_of(recording: Recording) -> AtiCalibration:
 @dataclass(frozen=True)
 class _RecordedPoint:
     recording: Recording
+    record: SetPointRecord
     row: pd.Series
     order: tuple[str, int]
 
@@ -82,6 +95,10 @@ class MeasuredSetPoint:
         Balance calibration with the rig's tool transform (body frame at the rig's reference point).
     tare_id : str
         ``<run id>#<plan point index>`` of the tare used (points sharing it share its error).
+    flags : dict of str to int
+        ``saturated_samples`` and ``over_range_samples`` of the point's record and ``tare_saturated_samples``
+        and ``tare_over_range_samples`` of its tare's (-1: the recording did not check); non-zero only when
+        flagged records were kept (``keep_saturated=True``).
     """
 
     recording: Recording
@@ -90,6 +107,7 @@ class MeasuredSetPoint:
     tare_volts_standard_error: np.ndarray
     calibration: AtiCalibration
     tare_id: str
+    flags: dict[str, int] = field(default_factory=dict)
 
     def gauge_and_hall_volts(self) -> tuple[np.ndarray, np.ndarray]:
         """Raw gauge voltages (n, 6) and Hall line (n,) of the point, V; a record with lost samples is refused
@@ -132,38 +150,108 @@ def _recorded_points(run_directories: Iterable[Path]) -> list[_RecordedPoint]:
     for directory in run_directories:
         recording = load_recording(directory)
         table = recording.set_points_frame()
-        for _, row in table.iterrows():
+        for record, (_, row) in zip(recording.set_points, table.iterrows(), strict=True):
             points.append(
                 _RecordedPoint(
                     recording,
+                    record,
                     row,
                     (recording.metadata["start_time_utc"], int(row["set_point_index"])),
                 )
             )
-    return sorted(points, key=lambda point: point.order)
+    return sorted(_without_superseded(points), key=lambda point: point.order)
 
 
-def measured_set_points(run_directories: Iterable[Path | str]) -> list[MeasuredSetPoint]:
+def _without_superseded(points: list[_RecordedPoint]) -> list[_RecordedPoint]:
+    """Drop lossy records whose plan point a later run of the same chain recorded again (a resumed sweep)."""
+    resumed_from = {
+        point.recording.run_id: point.recording.metadata.get("configuration", {}).get(
+            "resumed_from_run_id"
+        )
+        for point in points
+    }
+
+    def continues(later_run_id: str, earlier_run_id: str) -> bool:
+        run_id = resumed_from.get(later_run_id)
+        while run_id is not None:
+            if run_id == earlier_run_id:
+                return True
+            run_id = resumed_from.get(run_id)
+        return False
+
+    recorded_in: dict[int, set[str]] = {}
+    for point in points:
+        recorded_in.setdefault(point.record.plan_point_index, set()).add(point.recording.run_id)
+    kept = []
+    for point in points:
+        run_id = point.recording.run_id
+        later = recorded_in[point.record.plan_point_index] - {run_id}
+        if point.record.samples_missing_in_record and any(
+            continues(other, run_id) for other in later
+        ):
+            continue
+        kept.append(point)
+    return kept
+
+
+def _flag_counts(record: SetPointRecord, prefix: str = "") -> dict[str, int]:
+    return {
+        f"{prefix}saturated_samples": -1
+        if record.saturated_samples is None
+        else int(record.saturated_samples),
+        f"{prefix}over_range_samples": -1
+        if record.over_range_samples is None
+        else int(record.over_range_samples),
+    }
+
+
+def _refuse_flagged(point: _RecordedPoint) -> None:
+    record = point.record
+    raise UserInputError(
+        f"{point.recording.run_directory}: set point {record.plan_point_index}",
+        f"{record.saturated_samples or 0} of "
+        f"{record.last_sample_index - record.first_sample_index + 1} samples saturated (a channel at the "
+        f"ADC limit or the board's over-range flag) and {record.over_range_samples or 0} over the sensor's "
+        f"rated load in the {record.kind}'s record; its loads are clipped: record it again within range, or "
+        "pass --keep-saturated to process it flagged",
+    )
+
+
+def measured_set_points(
+    run_directories: Iterable[Path | str], keep_saturated: bool = False
+) -> list[MeasuredSetPoint]:
     """Every measured set point of the given runs in recording order, each paired with its tare.
+
+    Parameters
+    ----------
+    run_directories : iterable of path
+        The runs (e.g. a sweep chain, oldest first).
+    keep_saturated : bool
+        Keep records with saturated or over-range samples (their counts go to :attr:`MeasuredSetPoint.flags`)
+        instead of refusing them.
 
     Raises
     ------
     UserInputError
-        If a measurement has no earlier tare at its pitch and tail state, or a calibration file changed.
+        If a measurement has no earlier tare at its pitch and tail state, a calibration file changed, or (unless
+        ``keep_saturated``) a measurement or tare has saturated or over-range samples.
     """
     points = _recorded_points(Path(directory) for directory in run_directories)
-    tares: dict[tuple[bool, float], tuple[np.ndarray, np.ndarray, str]] = {}
+    tares: dict[tuple[bool, float], tuple[np.ndarray, np.ndarray, str, SetPointRecord]] = {}
     calibrations: dict[str, AtiCalibration] = {}
     measured = []
     for point in points:
         row = point.row
         tailed = bool(row["tail_attached"])
         pitch_key = round(float(row["pitch_rad"]), 9)
+        if point.record.is_flagged and not keep_saturated:
+            _refuse_flagged(point)
         if row["kind"] == "tare":
             frame = point.recording.set_point_frame(int(row["set_point_index"]))
             tares[(tailed, pitch_key)] = (
                 *tare_volts_and_error(frame[list(GAUGE_CHANNELS)].to_numpy(dtype=float)),
                 f"{point.recording.run_id}#{int(row['plan_point_index'])}",
+                point.record,
             )
             continue
         tare = tares.get((tailed, pitch_key))
@@ -176,8 +264,11 @@ def measured_set_points(run_directories: Iterable[Path | str]) -> list[MeasuredS
         run_id = point.recording.run_id
         if run_id not in calibrations:
             calibrations[run_id] = balance_calibration_of(point.recording)
+        flags = {**_flag_counts(point.record), **_flag_counts(tare[3], "tare_")}
         measured.append(
-            MeasuredSetPoint(point.recording, row, tare[0], tare[1], calibrations[run_id], tare[2])
+            MeasuredSetPoint(
+                point.recording, row, tare[0], tare[1], calibrations[run_id], tare[2], flags
+            )
         )
     return measured
 
@@ -203,9 +294,11 @@ def frequency_cross_check_record(
     }
 
 
-def cycle_averaged_table(run_directories: Iterable[Path | str]) -> pd.DataFrame:
+def cycle_averaged_table(
+    run_directories: Iterable[Path | str], keep_saturated: bool = False
+) -> pd.DataFrame:
     """One row per measured set point of the given runs, in recording order (see :func:`table_of_points`)."""
-    return table_of_points(measured_set_points(run_directories))
+    return table_of_points(measured_set_points(run_directories, keep_saturated))
 
 
 def table_of_points(
@@ -215,7 +308,9 @@ def table_of_points(
 
     Columns: ``run_id``, ``tail_id``, ``x_h_mm``, ``plan_point_index``, ``sweep``, ``tailed``, ``repeat``,
     ``theta_deg``, ``v_m_s``, ``f_set_hz``, ``tare_id`` (``<run id>#<plan point index>`` of the tare used),
-    ``f_hall_hz``, ``cycles``, ``rejected_cycles``, the flapping
+    ``f_hall_hz``, ``cycles``, ``rejected_cycles``, ``saturated_samples``, ``over_range_samples``,
+    ``tare_saturated_samples``, ``tare_over_range_samples`` (rows of the record and of its tare flagged at the
+    ADC limit / over the rated load; -1: not checked), the flapping
     frequency cross-check ``motor_rpm``, ``f_motor_hz`` (= rpm / 60 / 21.33), ``f_disagreement`` ((Hall - motor) /
     motor) and ``f_disagrees`` (beyond 2 %), and for each body load of
     :data:`~ornitail.balance.point_loads.BODY_LOAD_NAMES` its mean, ``_2sigma`` (2 sigma over cycles), ``_se``
@@ -248,6 +343,7 @@ def table_of_points(
                 "v_m_s": float(row["tunnel_velocity_m_s"]),
                 "f_set_hz": float(row["flapping_frequency_hz"]),
                 "tare_id": point.tare_id,
+                **{name: point.flags.get(name, -1) for name in SATURATION_COLUMNS},
                 **loads.as_record(),
                 **frequency_cross_check_record(
                     loads.flapping_frequency_hz, row.get("motor_rpm_mean")
@@ -257,6 +353,22 @@ def table_of_points(
         if on_point is not None:
             on_point(done, len(points))
     return pd.DataFrame(rows)
+
+
+def saturation_warnings(table: pd.DataFrame) -> list[str]:
+    """One line per kept set point whose record or tare has saturated or over-range samples."""
+    lines = []
+    for _, row in table.iterrows():
+        counts = {name: int(row.get(name, -1)) for name in SATURATION_COLUMNS}
+        if any(count > 0 for count in counts.values()):
+            lines.append(
+                f"warning: {row['run_id']} set point {int(row['plan_point_index'])} ({row['sweep']}) kept "
+                f"with saturated samples: {max(counts['saturated_samples'], 0)} at the ADC limit and "
+                f"{max(counts['over_range_samples'], 0)} over the rated load in its record, "
+                f"{max(counts['tare_saturated_samples'], 0)} and "
+                f"{max(counts['tare_over_range_samples'], 0)} in its tare; its loads are clipped"
+            )
+    return lines
 
 
 def frequency_check_warnings(table: pd.DataFrame) -> list[str]:

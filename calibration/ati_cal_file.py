@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import read_input_bytes
 
 AXIS_NAMES = ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")
 SUPPORTED_GAUGE_COUNT = 6
@@ -198,8 +199,5 @@ def read_ati_cal_bytes(data: bytes, source: str) -> AtiCalFileContents:
 def read_ati_cal_file(path: str | Path) -> tuple[AtiCalFileContents, bytes]:
     """Read and parse an ATI ``.cal`` file; return its contents and its raw bytes."""
     path = Path(path)
-    try:
-        data = path.read_bytes()
-    except OSError as error:
-        raise UserInputError(str(path), f"cannot read file ({error.strerror or error})") from None
+    data = read_input_bytes(path)
     return read_ati_cal_bytes(data, str(path)), data

@@ -27,6 +27,7 @@ from ornitail.calibration.ati_units import (
     newtons_per_force_unit,
 )
 from ornitail.calibration.tool_transform import ToolTransform
+from ornitail.core.errors import UserInputError
 from ornitail.core.hashing import content_hash_of_bytes
 
 WRENCH_COMPONENT_NAMES = ("fx", "fy", "fz", "tx", "ty", "tz")
@@ -37,6 +38,29 @@ def _si_row_factors(contents: AtiCalFileContents, source: str) -> np.ndarray:
     newtons = newtons_per_force_unit(contents.force_units, f"{source}: ForceUnits")
     newton_metres = newton_metres_per_torque_unit(contents.torque_units, f"{source}: TorqueUnits")
     return np.array([newtons] * 3 + [newton_metres] * 3)
+
+
+MAX_CONDITION_NUMBER = 1e12
+"""A calibration matrix worse conditioned than this is refused as singular."""
+
+
+def _check_invertible(matrix_si: np.ndarray, source: str) -> None:
+    """Refuse a non-finite, all-zero or singular calibration matrix (it maps loads to nothing)."""
+    if not np.all(np.isfinite(matrix_si)):
+        raise UserInputError(
+            source, "calibration matrix has values too large to use (not finite in SI units)"
+        )
+    if not np.any(matrix_si):
+        raise UserInputError(source, "calibration matrix is all zeros (singular)")
+    condition = np.linalg.cond(matrix_si)
+    if not np.isfinite(condition) or condition > MAX_CONDITION_NUMBER:
+        rank = int(np.linalg.matrix_rank(matrix_si))
+        raise UserInputError(
+            source,
+            f"calibration matrix is singular or badly scaled (rank {rank} of 6, condition number "
+            f"{condition:.3g}): "
+            "some loads would give no gauge signal",
+        )
 
 
 def basic_matrix_with_basic_transform_si(contents: AtiCalFileContents, source: str) -> np.ndarray:
@@ -108,6 +132,7 @@ class AtiCalibration:
         else:
             sensor_matrix_si = basic_matrix_with_basic_transform_si(contents, source)
             ranges_si = contents.axis_maxima * row_factors
+        _check_invertible(sensor_matrix_si, source)
         return cls(
             path=path,
             content_hash=content_hash_of_bytes(data),

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
+import numpy as np
 
 from ornitail.calibration.ati_cal_file import AXIS_NAMES
 from ornitail.calibration.ati_calibration import (
@@ -24,9 +25,12 @@ from ornitail.calibration.thermocouple_amplifier import CELSIUS_TO_KELVIN_OFFSET
 from ornitail.calibration.tool_transform import parse_tool_transform_option
 from ornitail.calibration.tunnel_table import TunnelVelocityTable
 from ornitail.core.errors import UserInputError, require_finite
+from ornitail.core.input_files import prepare_output_file
 from ornitail.core.output import emit, json_option
 
 DEFAULT_WIRE_TEMPERATURE_C = 250.0
+MAX_WIRE_TEMPERATURE_C = 1000.0
+"""Hottest wire (and reference) temperature accepted, degC (hot wires run at 200-300 degC)."""
 
 calibration_group = click.Group("calibration", help="Balance, hot-wire and tunnel calibrations.")
 
@@ -57,10 +61,18 @@ def convert_command(
     calibration = AtiCalibration.from_file(cal_path).with_tool_transform(
         parse_tool_transform_option(tool_transform)
     )
-    wrench = calibration.forces_from_voltages(
-        parse_comma_separated_numbers(volts, 6, "--volts"),
-        parse_comma_separated_numbers(bias, 6, "--bias"),
-    )
+    if not np.all(np.isfinite(calibration.matrix_si)):
+        raise UserInputError("--tool-transform", f"{tool_transform!r} is too large to use")
+    volts_values = parse_comma_separated_numbers(volts, 6, "--volts")
+    bias_values = parse_comma_separated_numbers(bias, 6, "--bias")
+    with np.errstate(over="ignore", invalid="ignore"):
+        wrench = calibration.forces_from_voltages(volts_values, bias_values)
+    if not np.all(np.isfinite(wrench)):
+        raise UserInputError(
+            "--volts/--bias",
+            f"volts {volts!r} minus bias {bias!r} give forces too large to represent "
+            "(not finite); gauge voltages are a few volts",
+        )
     result = dict(zip(WRENCH_COMPONENT_NAMES, wrench.tolist(), strict=True))
 
     def render(values: dict) -> str:
@@ -150,20 +162,37 @@ def hotwire_fit_command(
     as_json: bool,
 ) -> None:
     """Fit King's law or a polynomial to hot-wire calibration points; report residuals."""
-    require_finite("--wire-temperature-c", wire_temperature_c)
-    if reference_temperature_c is not None:
-        require_finite("--reference-temperature-c", reference_temperature_c)
+    for option, value in (
+        ("--wire-temperature-c", wire_temperature_c),
+        ("--reference-temperature-c", reference_temperature_c),
+    ):
+        if value is None:
+            continue
+        require_finite(option, value)
+        if not -CELSIUS_TO_KELVIN_OFFSET < value <= MAX_WIRE_TEMPERATURE_C:
+            raise UserInputError(
+                option,
+                f"{value:g} degC is outside {-CELSIUS_TO_KELVIN_OFFSET:g}..{MAX_WIRE_TEMPERATURE_C:g} degC",
+            )
     if out_path is not None and out_path.suffix.lower() not in (".toml", ".json"):
         raise UserInputError("--out", f"{out_path} must end in .toml or .json")
+    if out_path is not None:
+        prepare_output_file(out_path)
     points = read_hotwire_points(points_path)
     wire_temperature_k = wire_temperature_c + CELSIUS_TO_KELVIN_OFFSET
     reference_temperature_k = None
     if reference_temperature_c is not None:
         reference_temperature_k = reference_temperature_c + CELSIUS_TO_KELVIN_OFFSET
-    if law == "king":
-        fit = fit_kings_law(points, wire_temperature_k, reference_temperature_k)
-    else:
-        fit = fit_polynomial_law(points, wire_temperature_k, order, reference_temperature_k)
+    try:
+        if law == "king":
+            fit = fit_kings_law(points, wire_temperature_k, reference_temperature_k)
+        else:
+            fit = fit_polynomial_law(points, wire_temperature_k, order, reference_temperature_k)
+    except UserInputError as error:
+        option = {"wire temperature": "--wire-temperature-c", "polynomial order": "--order"}
+        if error.where in option:
+            raise UserInputError(option[error.where], error.problem) from None
+        raise
     fitted_law = fit.law if out_path is None else save_hotwire_law(fit.law, out_path)
     if isinstance(fitted_law, KingsLaw):
         coefficients = {
@@ -243,10 +272,16 @@ def tunnel_command(
     if (fan_rpm is None) == (velocity_m_s is None):
         raise UserInputError("--rpm/--velocity-m-s", "give exactly one of the two")
     table = TunnelVelocityTable.from_csv(table_path)
-    if fan_rpm is not None:
-        fan_rpm_value, velocity_value = fan_rpm, table.velocity_m_s_at_rpm(fan_rpm)
-    else:
-        fan_rpm_value, velocity_value = table.rpm_for_velocity(velocity_m_s), velocity_m_s
+    try:
+        if fan_rpm is not None:
+            fan_rpm_value, velocity_value = fan_rpm, table.velocity_m_s_at_rpm(fan_rpm)
+        else:
+            fan_rpm_value, velocity_value = table.rpm_for_velocity(velocity_m_s), velocity_m_s
+    except UserInputError as error:
+        option = {"fan_rpm": "--rpm", "velocity_m_s": "--velocity-m-s"}.get(error.where)
+        if option is None:
+            raise
+        raise UserInputError(option, error.problem) from None
     result = {
         "fan_rpm": float(fan_rpm_value),
         "velocity_m_s": float(velocity_value),

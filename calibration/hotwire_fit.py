@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -113,6 +114,8 @@ def fit_kings_law(
         points, wire_temperature_k, reference_temperature_k
     )
     velocity = points.velocity_m_s
+    _require_distinct(points.path, velocity, 3 if free_exponent else 2, "velocities", "King's law")
+    _require_distinct(points.path, corrected, 2, "voltages", "King's law")
     design = np.column_stack([np.ones_like(velocity), np.sqrt(velocity)])
     (a_v2, b), *_ = np.linalg.lstsq(design, corrected**2, rcond=None)
     exponent = KING_EXPONENT_FIRST_GUESS
@@ -153,7 +156,29 @@ def fit_kings_law(
         provenance=HotwireFitProvenance(points.content_hash, int(velocity.size), 0.0, 0.0),
     )
     report = _residual_report(law, points, standard_errors)
+    _require_finite_fit(points.path, report)
     return HotwireFit(_with_provenance(law, report, points), report)
+
+
+def _require_distinct(
+    path: Path | None, values: np.ndarray, needed: int, what: str, law: str
+) -> None:
+    """Refuse points with fewer than ``needed`` distinct ``values``: the fit is undetermined."""
+    distinct = int(np.unique(values).size)
+    if distinct < needed:
+        raise UserInputError(
+            str(path),
+            f"the points have {distinct} distinct {what}; {law} needs at least {needed} "
+            "(calibrate over a range of velocities)",
+        )
+
+
+def _require_finite_fit(path: Path | None, report: HotwireFitReport) -> None:
+    """Refuse a fit whose fitted velocities are not finite (points far outside a hot wire's range)."""
+    if not np.all(np.isfinite(report.fitted_velocity_m_s)):
+        raise UserInputError(
+            str(path), "the fit gives non-finite velocities; check the points' values and units"
+        )
 
 
 def fit_polynomial_law(
@@ -174,6 +199,10 @@ def fit_polynomial_law(
     reference, corrected = _reference_and_corrected(
         points, wire_temperature_k, reference_temperature_k
     )
+    _require_distinct(
+        points.path, corrected, order + 1, "voltages", f"a polynomial of order {order}"
+    )
+    _require_distinct(points.path, points.velocity_m_s, 2, "velocities", "a polynomial law")
     coefficients = np.polynomial.polynomial.polyfit(corrected, points.velocity_m_s, order)
     law = PolynomialHotwireLaw(
         coefficients=coefficients,
@@ -184,4 +213,5 @@ def fit_polynomial_law(
         ),
     )
     report = _residual_report(law, points, {})
+    _require_finite_fit(points.path, report)
     return HotwireFit(_with_provenance(law, report, points), report)

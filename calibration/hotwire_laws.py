@@ -31,7 +31,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -41,6 +40,12 @@ import numpy as np
 from ornitail.calibration.hotwire_points import temperature_corrected_voltage
 from ornitail.core.errors import UserInputError
 from ornitail.core.hashing import content_hash_of_bytes
+from ornitail.core.input_files import (
+    decode_text,
+    parse_json_text,
+    parse_toml_text,
+    read_input_bytes,
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -199,20 +204,12 @@ def load_hotwire_law(path: str | Path) -> HotwireLaw:
     """Read a hot-wire law file written by :func:`save_hotwire_law`."""
     path = Path(path)
     source = str(path)
-    try:
-        data = path.read_bytes()
-    except OSError as error:
-        raise UserInputError(source, f"cannot read file ({error.strerror or error})") from None
     suffix = path.suffix.lower()
-    try:
-        if suffix == ".json":
-            fields = json.loads(data)
-        elif suffix == ".toml":
-            fields = tomllib.loads(data.decode())
-        else:
-            raise UserInputError(source, "hot-wire law file must end in .toml or .json")
-    except (json.JSONDecodeError, tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise UserInputError(source, f"not a valid {suffix[1:].upper()} file ({error})") from None
+    if suffix not in (".json", ".toml"):
+        raise UserInputError(source, "hot-wire law file must end in .toml or .json")
+    data = read_input_bytes(path)
+    text = decode_text(data, source)
+    fields = parse_json_text(text, source) if suffix == ".json" else parse_toml_text(text, source)
     if not isinstance(fields, dict):
         raise UserInputError(source, "top level must be a table of keys")
     provenance = HotwireFitProvenance(

@@ -44,6 +44,10 @@ class HotwireCalibrationPoints:
     path: Path | None = None
 
 
+MAX_HOTWIRE_VELOCITY_M_S = 300.0
+"""Fastest calibration velocity accepted, m/s (hot-wire laws hold for subsonic flow)."""
+
+
 def read_hotwire_points(path: str | Path) -> HotwireCalibrationPoints:
     """Read a ``velocity_m_s,voltage_v,temperature_c`` CSV file of calibration points."""
     path = Path(path)
@@ -52,6 +56,11 @@ def read_hotwire_points(path: str | Path) -> HotwireCalibrationPoints:
     )
     checks = (
         ("velocity_m_s", columns["velocity_m_s"] < 0.0, "velocity must not be negative"),
+        (
+            "velocity_m_s",
+            columns["velocity_m_s"] > MAX_HOTWIRE_VELOCITY_M_S,
+            f"velocity must be at most {MAX_HOTWIRE_VELOCITY_M_S:g} m/s (a subsonic hot wire)",
+        ),
         ("voltage_v", columns["voltage_v"] <= 0.0, "bridge voltage must be positive"),
         (
             "temperature_c",

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import decode_text, read_input_bytes
 
 
 def read_numeric_csv_columns(
@@ -29,13 +30,8 @@ def read_numeric_csv_columns(
     """
     path = Path(path)
     source = str(path)
-    try:
-        data = path.read_bytes()
-        text = data.decode("utf-8-sig")
-    except OSError as error:
-        raise UserInputError(source, f"cannot read file ({error.strerror or error})") from None
-    except UnicodeDecodeError:
-        raise UserInputError(source, "not a UTF-8 text file") from None
+    data = read_input_bytes(path)
+    text = decode_text(data, source)
     numbered_lines = [
         (number, line)
         for number, line in enumerate(text.splitlines(), start=1)

@@ -26,7 +26,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ornitail.calibration.number_lists import parse_comma_separated_numbers
-from ornitail.core.errors import require_finite
+from ornitail.core.errors import UserInputError, require_finite
+
+MAX_OFFSET_MM = 10_000.0
+"""Largest tool-transform displacement accepted, mm (10 m: beyond any balance mounting)."""
 
 
 def rotation_about_x(angle_rad: float) -> np.ndarray:
@@ -93,6 +96,17 @@ class ToolTransform:
         """Build from the user-facing six numbers: displacement in mm, ATI angles in degrees."""
         values = [dx_mm, dy_mm, dz_mm, rx_deg, ry_deg, rz_deg]
         require_finite(where, values)
+        for name, value, bound in zip(
+            ("dx", "dy", "dz", "rx", "ry", "rz"),
+            values,
+            [MAX_OFFSET_MM] * 3 + [360.0] * 3,
+            strict=True,
+        ):
+            if abs(value) > bound:
+                unit = "mm" if name.startswith("d") else "deg"
+                raise UserInputError(
+                    where, f"{name} = {value:g} {unit} is outside +-{bound:g} {unit}"
+                )
         return cls.from_si(np.array(values[:3]) * 1e-3, np.radians(values[3:]))
 
     def angles_rad(self) -> np.ndarray:

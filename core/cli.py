@@ -3,21 +3,49 @@
 from __future__ import annotations
 
 import sys
+from typing import Any, NoReturn
 
 import click
 
 from ornitail.core.errors import UserInputError
 
 
+def _one_line(text: str) -> str:
+    """``text`` with its line breaks turned into spaces."""
+    return " ".join(line.strip() for line in str(text).splitlines() if line.strip())
+
+
+def _exit_with_click_error(error: click.ClickException) -> NoReturn:
+    """Print a click usage or parameter error as one line and exit with its code (2 for usage)."""
+    message = _one_line(error.format_message())
+    context = getattr(error, "ctx", None)
+    if isinstance(error, click.UsageError) and context is not None:
+        message += f" (see: {context.command_path} --help)"
+    click.echo(f"ornitail: error: {message}", err=True)
+    sys.exit(error.exit_code)
+
+
 class _UserErrorsAsOneLine(click.Group):
-    """A click group that turns :class:`UserInputError` into one line on stderr and exit code 2."""
+    """A click group that turns :class:`UserInputError` into one line on stderr and exit code 2.
+
+    Click's own usage and parameter errors (unknown option, missing or ill-typed value) become one
+    line too, with click's exit code (2).
+    """
+
+    def make_context(self, *args: Any, **kwargs: Any) -> click.Context:  # noqa: D102
+        try:
+            return super().make_context(*args, **kwargs)
+        except click.ClickException as error:
+            _exit_with_click_error(error)
 
     def invoke(self, ctx: click.Context):  # noqa: D102 - click override
         try:
             return super().invoke(ctx)
         except UserInputError as error:
-            click.echo(f"ornitail: error: {error}", err=True)
+            click.echo(f"ornitail: error: {_one_line(str(error))}", err=True)
             sys.exit(2)
+        except click.ClickException as error:
+            _exit_with_click_error(error)
 
 
 @click.group(cls=_UserErrorsAsOneLine)

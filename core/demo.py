@@ -21,6 +21,7 @@ import pandas as pd
 from ornitail.acquisition.catalog import default_data_root
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE
 from ornitail.acquisition.sweep_cli import (
+    check_time_scale_option,
     exit_code_of,
     guarded,
     run_sweep_with_progress,
@@ -129,6 +130,7 @@ def _render(result: dict[str, Any]) -> str:
 @json_option
 def demo_command(data_root: Path | None, time_scale: float, as_json: bool) -> None:
     """Run the study's tunnel protocol on the simulated rig and print cycle-averaged forces."""
+    check_time_scale_option(time_scale)
     data_root = data_root or default_data_root()
     plan_resource = files("ornitail.acquisition") / "data" / "study_tunnel_plan.toml"
     with as_file(plan_resource) as plan_path:

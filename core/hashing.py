@@ -5,7 +5,7 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
-from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import read_input_bytes
 
 
 def content_hash_of_bytes(data: bytes) -> str:
@@ -15,8 +15,4 @@ def content_hash_of_bytes(data: bytes) -> str:
 
 def content_hash_of_file(path: str | Path) -> str:
     """Return ``"sha256:<hex>"`` of the file's bytes; a missing file is a user error."""
-    path = Path(path)
-    try:
-        return content_hash_of_bytes(path.read_bytes())
-    except OSError as error:
-        raise UserInputError(str(path), f"cannot read file ({error.strerror or error})") from None
+    return content_hash_of_bytes(read_input_bytes(path))

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import check_input_file
 
 
 def is_finite_number(value: Any) -> bool:
@@ -105,9 +106,9 @@ class TomlTable:
         value = self.get(key, default)
         if isinstance(value, bool) or not isinstance(value, int):
             raise UserInputError(self.where(key), f"{value!r} must be a whole number")
-        if maximum is None and value < minimum:
+        if value < minimum:
             raise UserInputError(self.where(key), f"{value} must be >= {minimum}")
-        if maximum is not None and not minimum <= value <= maximum:
+        if maximum is not None and value > maximum:
             raise UserInputError(self.where(key), f"{value} must be in {minimum}..{maximum}")
         return value
 
@@ -134,11 +135,15 @@ class TomlTable:
         return low, high
 
     def file(self, key: str) -> Path:
-        """An existing file, relative to the TOML file's folder."""
+        """An existing regular file of readable size, relative to the TOML file's folder."""
         relative = self.text(key)
         resolved = (self.path.parent / relative).resolve()
-        if not resolved.is_file():
+        if not resolved.exists():
             raise UserInputError(
                 self.where(key), f"file {relative!r} not found (looked for {resolved})"
             )
+        try:
+            check_input_file(resolved)
+        except UserInputError as error:
+            raise UserInputError(self.where(key), f"{relative!r}: {error.problem}") from None
         return resolved

@@ -39,6 +39,8 @@ BASE_TAIL_SPAN_M = 0.080
 BASE_TAIL_CHORD_M = 0.048
 BASE_TAIL_CORNER_SETBACK_M = 0.010
 _CONTAINMENT_TOLERANCE_M = 1e-9
+MAX_DIMENSION_M = 1.0
+"""Longest tail dimension accepted (span, chords), m: a DelFly tail is a few hundred mm."""
 
 
 def base_tail_outline_vertices_m() -> np.ndarray:
@@ -145,6 +147,11 @@ class TailGeometry:
             f"{name} = {value!r} must be a positive finite length"
             for name, value in named.items()
             if not (isinstance(value, int | float) and math.isfinite(value) and value > 0)
+        ]
+        problems += [
+            f"{name} = {value * 1e3:g} mm is longer than {MAX_DIMENSION_M * 1e3:g} mm"
+            for name, value in named.items()
+            if not problems and value > MAX_DIMENSION_M
         ]
         if problems:
             return problems

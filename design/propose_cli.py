@@ -9,6 +9,7 @@ from typing import Any
 import click
 
 from ornitail.core.errors import UserInputError, require_finite
+from ornitail.core.input_files import prepare_output_directory
 from ornitail.core.output import emit, json_option
 from ornitail.design.design_evaluation import IntervalEstimate, PredictedQuantity
 from ornitail.design.drawing import write_proposal_drawings
@@ -32,13 +33,45 @@ _UNMET_UNITS = {
 }
 
 
-def _band(where: str, value: float | None, tolerance: float, scale: float) -> TargetBand | None:
+MAX_TARGETS = {"--v-ss-m-s": 20.0, "--f-ss-hz": 100.0, "--omega-rad-s": 1000.0}
+"""Largest targets accepted (m/s, Hz, rad/s): far beyond any flapping-wing MAV."""
+X_H_RANGE_MM = (20.0, 300.0)
+"""Tail positions accepted, mm (as the simulator's)."""
+MAX_STARTS = 1000
+"""Most optimiser starts per position."""
+MAX_ROBUST_K = 10.0
+"""Largest robust factor k (sigmas)."""
+
+
+def _band(
+    where: str, value: float | None, tolerance: float, scale: float, tolerance_where: str
+) -> TargetBand | None:
+    require_finite(tolerance_where, tolerance)
+    if tolerance < 0:
+        raise UserInputError(tolerance_where, f"tolerance {tolerance!r} must be >= 0")
     if value is None:
         return None
-    require_finite(where, [value, tolerance])
-    if tolerance < 0:
-        raise UserInputError(where, f"tolerance {tolerance!r} must be >= 0")
+    require_finite(where, value)
     return TargetBand.around(value * scale, tolerance * scale)
+
+
+def check_solver_options(
+    x_h_mm: float | None, start_count: int, robust_k: float = 0.0, point_count: int | None = None
+) -> None:
+    """Refuse a tail position, start count, robust factor or front size outside its range."""
+    if x_h_mm is not None:
+        require_finite("--x-h-mm", x_h_mm)
+        if not X_H_RANGE_MM[0] <= x_h_mm <= X_H_RANGE_MM[1]:
+            raise UserInputError(
+                "--x-h-mm", f"{x_h_mm:g} mm is outside {X_H_RANGE_MM[0]:g}-{X_H_RANGE_MM[1]:g} mm"
+            )
+    if not 1 <= start_count <= MAX_STARTS:
+        raise UserInputError("--starts", f"{start_count} is outside 1..{MAX_STARTS}")
+    require_finite("--robust-k", robust_k)
+    if not 0.0 <= robust_k <= MAX_ROBUST_K:
+        raise UserInputError("--robust-k", f"{robust_k:g} is outside 0..{MAX_ROBUST_K:g}")
+    if point_count is not None and not 2 <= point_count <= 100:
+        raise UserInputError("--points", f"{point_count} is outside 2..100")
 
 
 def targets_from_options(
@@ -70,12 +103,18 @@ def targets_from_options(
     ):
         if value is not None and not (math.isfinite(value) and value > 0):
             raise UserInputError(where, f"value {value!r} must be a positive finite number")
+        if value is not None and value > MAX_TARGETS[where]:
+            raise UserInputError(where, f"value {value:g} is more than {MAX_TARGETS[where]:g}")
     return DesignTargets(
-        theta_ss_rad=_band("--theta-ss-deg", theta_ss_deg, theta_tol_deg, math.radians(1.0)),
-        v_ss_m_s=_band("--v-ss-m-s", v_ss_m_s, v_tol_m_s, 1.0),
-        f_ss_hz=_band("--f-ss-hz", f_ss_hz, f_tol_hz, 1.0),
+        theta_ss_rad=_band(
+            "--theta-ss-deg", theta_ss_deg, theta_tol_deg, math.radians(1.0), "--theta-tol-deg"
+        ),
+        v_ss_m_s=_band("--v-ss-m-s", v_ss_m_s, v_tol_m_s, 1.0, "--v-tol-m-s"),
+        f_ss_hz=_band("--f-ss-hz", f_ss_hz, f_tol_hz, 1.0, "--f-tol-hz"),
         damping_ratio_min=zeta,
-        natural_frequency_rad_s=_band("--omega-rad-s", omega_rad_s, omega_tol_rad_s, 1.0),
+        natural_frequency_rad_s=_band(
+            "--omega-rad-s", omega_rad_s, omega_tol_rad_s, 1.0, "--omega-tol-rad-s"
+        ),
     )
 
 
@@ -338,8 +377,8 @@ def propose_command(
         )
     if x_h_mm is not None and continuous_x_h:
         raise UserInputError("--x-h-mm", "give either --x-h-mm or --continuous-x-h, not both")
-    if x_h_mm is not None:
-        require_finite("--x-h-mm", x_h_mm)
+    check_solver_options(x_h_mm, start_count, robust_k)
+    prepare_output_directory(out_dir)
     trend_model = trend_model_from_options(study, campaigns, tunnels, user_csvs, basis)
     proposal = propose(
         trend_model,

@@ -19,7 +19,6 @@ nose-down). An empty cell (CSV) or ``null`` (JSON) means *not measured* and give
 from __future__ import annotations
 
 import csv
-import json
 import math
 import re
 from dataclasses import dataclass
@@ -28,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import read_input_text, read_json_file
 from ornitail.design.geometry import TailGeometry, study_tails
 
 QUANTITIES = (
@@ -270,22 +270,16 @@ def _campaign_records(path: Path) -> list[dict[str, Any]]:
 
 
 def _read_json(path: Path) -> Any:
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise UserInputError(str(path), "file not found") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        raise UserInputError(str(path), f"not valid JSON ({error})") from None
+    return read_json_file(path, finite=False)  # NaN/null cells are checked per field
 
 
 def _read_csv(path: Path) -> list[dict[str, str]]:
+    text = read_input_text(path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise UserInputError(str(path), "file not found") from None
-    except UnicodeDecodeError:
-        raise UserInputError(str(path), "not a text CSV file") from None
-    rows = list(csv.DictReader(line for line in text.splitlines() if not line.startswith("#")))
+        lines = (line for line in text.splitlines() if not line.startswith("#"))
+        rows = list(csv.DictReader(lines))
+    except csv.Error as error:
+        raise UserInputError(str(path), f"not a readable CSV file ({error})") from None
     if not rows:
         raise UserInputError(str(path), "no data rows")
     return rows

@@ -9,8 +9,10 @@ from typing import Any
 import click
 
 from ornitail.core.errors import UserInputError, require_finite
+from ornitail.core.input_files import prepare_output_directory
 from ornitail.core.output import emit, json_option, to_jsonable
 from ornitail.design.geometry import TailGeometry
+from ornitail.design.propose_cli import X_H_RANGE_MM
 from ornitail.design.trend_sources import gather_observations, trend_source_options
 from ornitail.design.trends import fit_trends
 
@@ -24,7 +26,14 @@ def _prediction_vector(options: dict[str, float | None]) -> tuple[float, ...] | 
     missing = [f"--{name.replace('_', '-')}" for name in _PREDICT_OPTIONS if name not in given]
     if missing:
         raise UserInputError("--predict-*", f"a prediction needs {', '.join(missing)} too")
-    require_finite("--predict-*", list(given.values()))
+    for name, value in given.items():
+        require_finite(f"--{name.replace('_', '-')}", value)
+    x_h_low, x_h_high = X_H_RANGE_MM
+    if not x_h_low <= given["predict_x_h_mm"] <= x_h_high:
+        raise UserInputError(
+            "--predict-x-h-mm",
+            f"{given['predict_x_h_mm']:g} mm is outside {x_h_low:g}-{x_h_high:g} mm",
+        )
     TailGeometry.from_mm(
         given["predict_b"], given["predict_b_le"], given["predict_c_r"], given["predict_c_t"]
     ).validate("--predict-b/--predict-b-le/--predict-c-r/--predict-c-t")
@@ -83,8 +92,10 @@ def trends_command(
 ) -> None:
     """Fit steady state and derivatives against tail geometry and x_h; print coefficients, LOO RMSE,
     sources and, with --predict-*, a prediction with both intervals and its extrapolation measure."""
-    observations = gather_observations(study, campaigns, tunnels, user_csvs)
     vector = _prediction_vector(predict_options)
+    if out_dir is not None:
+        prepare_output_directory(out_dir)
+    observations = gather_observations(study, campaigns, tunnels, user_csvs)
     model = fit_trends(observations, basis=basis)
     result: dict[str, Any] = {
         "basis": basis,

@@ -10,6 +10,7 @@ bar on stderr; with ``--json`` exactly one JSON object on stdout.
 
 from __future__ import annotations
 
+import io
 import math
 import sys
 from dataclasses import replace
@@ -19,11 +20,14 @@ from typing import Any
 import click
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import check_input_file, prepare_output_directory
 from ornitail.core.output import emit, json_option
 from ornitail.flight.campaign import run_campaign
 from ornitail.flight.campaign_file import (
     DEFAULT_SEED,
     DEFAULT_SIMULATED_MANOEUVRES,
+    MAX_SEED,
+    MAX_SIMULATED_MANOEUVRES,
     CampaignSpec,
     ConfigurationSpec,
     LogSource,
@@ -33,7 +37,7 @@ from ornitail.flight.campaign_file import (
 from ornitail.flight.campaign_plots import write_campaign_pictures
 from ornitail.flight.campaign_table import write_campaign_table
 from ornitail.flight.manoeuvres import DEFAULT_GLITCH_RULE, GLITCH_RULES
-from ornitail.flight.model_file import INPUT_HOLDS
+from ornitail.flight.model_file import INPUT_HOLDS, load_model
 from ornitail.flight.validation import DEFAULT_SELECTION_RULE, SELECTION_RULES
 
 PROGRESS_STEPS_PER_CONFIGURATION = 100
@@ -99,6 +103,10 @@ def _campaign_from_options(
     if simulate:
         if manoeuvres < 3:
             raise UserInputError("--manoeuvres", f"{manoeuvres} is fewer than 3")
+        if manoeuvres > MAX_SIMULATED_MANOEUVRES:
+            raise UserInputError(
+                "--manoeuvres", f"{manoeuvres} is more than {MAX_SIMULATED_MANOEUVRES}"
+            )
         for label in simulate:
             spec = configuration_from_label(label, "--simulate", simulated_manoeuvres=manoeuvres)
             if spec.label in configurations:
@@ -123,6 +131,16 @@ def _campaign_from_options(
         model or "delfly_longitudinal",
         **overrides,
     )
+
+
+def _check_inputs(campaign: CampaignSpec) -> None:
+    """Refuse a model that does not load and log files that cannot be read, before any work."""
+    load_model(campaign.model)
+    for configuration in campaign.configurations:
+        for source in configuration.logs:
+            if not source.path.exists():
+                raise UserInputError(str(source.path), "flight log not found")
+            check_input_file(source.path)
 
 
 def _render(result: dict[str, Any]) -> str:
@@ -180,7 +198,7 @@ def _render(result: dict[str, Any]) -> str:
 )
 @click.option(
     "--seed",
-    type=click.IntRange(min=0),
+    type=click.IntRange(min=0, max=MAX_SEED),
     default=None,
     help=f"Seed of the 70/30 split and of simulated flights [default: {DEFAULT_SEED}].",
 )
@@ -255,11 +273,13 @@ def campaign_command(
     campaign = _campaign_from_options(
         campaign_path, logs, simulate, manoeuvres, seed, model, masses, inertias, rules
     )
+    _check_inputs(campaign)
+    prepare_output_directory(out_directory)
     count = len(campaign.configurations)
     with click.progressbar(
         length=count * PROGRESS_STEPS_PER_CONFIGURATION,
         label="flight campaign",
-        file=sys.stderr,
+        file=sys.stderr if sys.stderr.isatty() else io.StringIO(),  # a log gets no progress bar
         show_eta=True,
         item_show_func=lambda note: note or "",
     ) as bar:
@@ -269,6 +289,8 @@ def campaign_command(
             bar.update(max(0, target - bar.pos), note)
 
         results = run_campaign(campaign, progress)
+    if not sys.stderr.isatty():  # a log gets one line once done, so a refusal stays one line
+        click.echo(f"flight campaign: {count} configuration(s) analysed", err=True)
     info = {
         "seed": campaign.seed,
         "model": campaign.model,

@@ -14,12 +14,12 @@ from __future__ import annotations
 
 import math
 import re
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import read_toml_file
 from ornitail.design.geometry import TailGeometry, study_tails
 from ornitail.flight.manoeuvres import DEFAULT_GLITCH_RULE, GLITCH_RULES
 from ornitail.flight.model_file import INPUT_HOLDS
@@ -28,6 +28,10 @@ from ornitail.flight.validation import DEFAULT_SELECTION_RULE, SELECTION_RULES
 CONFIGURATION_LABEL = re.compile(r"^(?P<tail>[A-Za-z][A-Za-z0-9_]*)@(?P<x_h_mm>[0-9.]+)$")
 DEFAULT_SIMULATED_MANOEUVRES = 21
 DEFAULT_SEED = 2018
+MAX_SEED = 2**32 - 1
+"""Largest seed accepted (numpy's legacy seed range; seeds are 0..2**32 - 1)."""
+MAX_SIMULATED_MANOEUVRES = 1000
+"""Most doublet manoeuvres simulated per configuration."""
 _RULE_CHOICES = {  # optional top-level keys of a campaign file and their allowed values
     "selection_rule": SELECTION_RULES,
     "glitch_rule": GLITCH_RULES,
@@ -154,18 +158,17 @@ def configuration_from_label(
 def read_campaign_file(path: str | Path) -> CampaignSpec:
     """Read a campaign TOML file (docs/flight-campaign.md); log paths relative to the file."""
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise UserInputError(str(path), "campaign file not found")
-    try:
-        document = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise UserInputError(str(path), f"not a valid TOML file: {error}") from None
+    document = read_toml_file(path)
     unknown = sorted(set(document) - {"seed", "model", "configuration", *_RULE_CHOICES})
     if unknown:
         raise UserInputError(f"{path}: {unknown[0]}", "unknown top-level key")
     seed = document.get("seed", DEFAULT_SEED)
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise UserInputError(f"{path}: seed", f"must be a non-negative integer, got {seed!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
+        raise UserInputError(
+            f"{path}: seed", f"must be a non-negative integer up to {MAX_SEED}, got {seed!r}"
+        )
     model = document.get("model", "delfly_longitudinal")
     if not isinstance(model, str):
         raise UserInputError(f"{path}: model", "must be a preset name or a model-file path")
@@ -222,8 +225,15 @@ def _configuration_from_table(table: Any, where: str, base: Path) -> Configurati
     for index, entry in enumerate(table.get("log", [])):
         logs.append(_log_from_table(entry, f"{where}.log[{index + 1}]", base))
     simulate = table.get("simulate", 0)
-    if isinstance(simulate, bool) or not isinstance(simulate, int) or simulate < 0:
-        raise UserInputError(f"{where}.simulate", "must be a number of manoeuvres (>= 0)")
+    if (
+        isinstance(simulate, bool)
+        or not isinstance(simulate, int)
+        or not 0 <= simulate <= MAX_SIMULATED_MANOEUVRES
+    ):
+        raise UserInputError(
+            f"{where}.simulate",
+            f"must be a number of manoeuvres in 0..{MAX_SIMULATED_MANOEUVRES}, got {simulate!r}",
+        )
     if not logs and simulate == 0:
         raise UserInputError(where, "lists no [[configuration.log]] and simulate = 0: no data")
     if logs and simulate:

@@ -17,6 +17,7 @@ A .mat log (MATLAB v4 to v7.2) holds either
 
 from __future__ import annotations
 
+import io
 import re
 from collections import Counter
 from collections.abc import Sequence
@@ -28,6 +29,7 @@ import scipy.io
 from scipy.io.matlab import mat_struct
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import check_input_file, read_input_text
 
 LOG_SUFFIXES = (".csv", ".parquet", ".pq", ".mat")
 MAX_STRUCT_NESTING = 1  # a struct of channels may hold structs of channels, no deeper
@@ -43,14 +45,17 @@ def read_flight_log(path: str | Path) -> pd.DataFrame:
         If the file is missing, of an unknown kind, unreadable, or has non-numeric columns.
     """
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise UserInputError(str(path), "flight log not found")
+    check_input_file(path)  # a regular file of bounded size (core/input_files.py)
     suffix = path.suffix.lower()
     if suffix == ".csv":
+        text = read_input_text(path)
         try:
-            data = pd.read_csv(path)
-        except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as error:
-            raise UserInputError(str(path), f"not a readable CSV file: {error}") from None
+            data = pd.read_csv(io.StringIO(text))
+        except (pd.errors.ParserError, pd.errors.EmptyDataError, ValueError) as error:
+            message = " ".join(str(error).split())
+            raise UserInputError(str(path), f"not a readable CSV file: {message}") from None
     elif suffix in (".parquet", ".pq"):
         data = _read_parquet(path)
     elif suffix == ".mat":
@@ -83,7 +88,16 @@ def _read_parquet(path: Path) -> pd.DataFrame:
 def _read_mat(path: Path) -> pd.DataFrame:
     try:
         contents = scipy.io.loadmat(path, squeeze_me=True, struct_as_record=False)
-    except (ValueError, OSError, NotImplementedError, scipy.io.matlab.MatReadError) as error:
+    except (
+        ValueError,
+        OSError,
+        NotImplementedError,
+        IndexError,
+        TypeError,
+        KeyError,
+        EOFError,
+        scipy.io.matlab.MatReadError,
+    ) as error:  # scipy reports malformed files in many ways
         raise UserInputError(str(path), f"not a readable MATLAB file (v4-v7.2): {error}") from None
     if "fdata" in contents:
         matrix = np.asarray(contents["fdata"], dtype=float)

@@ -42,6 +42,7 @@ def identify(
         raise UserInputError("method", f"expected one of {', '.join(METHODS)}, got {method!r}")
     spec = model.with_starts(start) if start else model
     signals = model_data(spec, data, where)
+    spec.state_space(spec.start_values(), signals.constants)  # refuses 1/0, overflow at the start
     if method == "equation_error":
         return estimate_equation_error(spec, signals)
 

@@ -30,6 +30,7 @@ import pandas as pd
 from scipy.signal import butter, sosfiltfilt
 
 from ornitail.core.errors import UserInputError
+from ornitail.flight.sample_interval import refuse_huge_times, refuse_long_sample_interval
 from ornitail.flight.sampling import uniform_grid
 
 STATE_COLUMNS = ("q_rad_s", "u_m_s", "w_m_s", "theta_rad")
@@ -252,8 +253,13 @@ def prepare_log(
     """
     require_log_columns(log, log_name)
     raw = log.reset_index(drop=True).copy()
-    grid = uniform_grid(
-        raw["time_s"].to_numpy(dtype=float), f"{log_name}: column time_s", first_row
+    refuse_huge_times(raw["time_s"].to_numpy(dtype=float), f"{log_name}: column time_s")
+    with np.errstate(over="ignore", invalid="ignore"):  # huge times: refused below, not warned
+        grid = uniform_grid(
+            raw["time_s"].to_numpy(dtype=float), f"{log_name}: column time_s", first_row
+        )
+    refuse_long_sample_interval(
+        grid.step_s, f"{log_name}: column time_s", "the column time_s must be in seconds"
     )
     time_s = grid.times_s()
     raw["time_s"] = time_s

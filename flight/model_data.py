@@ -9,6 +9,7 @@ import pandas as pd
 
 from ornitail.core.errors import UserInputError
 from ornitail.flight.model_file import SignalColumn, StateSpaceModelSpec
+from ornitail.flight.sample_interval import refuse_huge_times, refuse_long_sample_interval
 from ornitail.flight.sampling import uniform_grid
 
 
@@ -60,7 +61,14 @@ def model_data(spec: StateSpaceModelSpec, data: pd.DataFrame, where: str = "data
     if len(data) < max(10, 2 * parameter_count):
         raise UserInputError(where, f"only {len(data)} samples: too few to identify the model")
     time_s = data[spec.time_column].to_numpy(dtype=float) * spec.time_scale
-    time_step_s = uniform_grid(time_s, f"{where}: column {spec.time_column}").step_s
+    refuse_huge_times(time_s, f"{where}: column {spec.time_column}")
+    with np.errstate(over="ignore", invalid="ignore"):  # huge times: refused below, not warned
+        time_step_s = uniform_grid(time_s, f"{where}: column {spec.time_column}").step_s
+    refuse_long_sample_interval(
+        time_step_s,
+        f"{where}: column {spec.time_column}",
+        f"set [data].time_scale = 0.001 in the model file {spec.source}",
+    )
 
     def signal(column: SignalColumn) -> np.ndarray:
         if column.constant is not None:

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import math
 import re
-import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -22,6 +21,7 @@ import casadi
 import numpy as np
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import read_toml_file
 from ornitail.flight.expressions import FUNCTION_NAMES, Expression, parse_expression
 from ornitail.flight.state_space import NumericStateSpace
 
@@ -162,7 +162,7 @@ class StateSpaceModelSpec:
         numeric = {}
         for matrix_name, rows in self.matrices.items():
             numeric[matrix_name] = np.array(
-                [[float(entry.evaluate(values)) for entry in row] for row in rows], dtype=float
+                [[_finite_entry(entry, values) for entry in row] for row in rows], dtype=float
             ).reshape(self.matrix_shape(matrix_name))
         return NumericStateSpace(
             a_matrix=numeric["A"],
@@ -210,6 +210,19 @@ class StateSpaceModelSpec:
         return self._functions["matrices"]
 
 
+def _finite_entry(entry: Expression, values: Mapping[str, float]) -> float:
+    """A matrix entry's value; a non-finite one is refused naming the entry and its names' values."""
+    value = float(entry.evaluate(values))
+    if not math.isfinite(value):
+        used = ", ".join(f"{name} = {values[name]!r}" for name in sorted(entry.names))
+        raise UserInputError(
+            entry.where,
+            f"{entry.text[:60]!r} is {value} (not a finite number)"
+            + (f" with {used}" if used else ""),
+        )
+    return value
+
+
 def require_finite_value(where: str, value: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise UserInputError(where, f"expected a number, got {value!r}")
@@ -232,21 +245,19 @@ def load_model(path_or_preset_name: str | Path) -> StateSpaceModelSpec:
         Naming the file and field for any mistake in the file.
     """
     text = str(path_or_preset_name)
+    if not text.strip():
+        raise UserInputError("model", "empty model name; give a preset name or a model file")
     if text in preset_names():
         path = PRESET_DIRECTORY / f"{text}.toml"
     else:
         path = Path(text)
-        if not path.is_file():
+        if not path.exists():
             raise UserInputError(
                 text,
                 "model file not found (and not a preset name; presets: "
                 f"{', '.join(preset_names())})",
             )
-    try:
-        document = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise UserInputError(str(path), f"not a valid TOML file: {error}") from None
-    return model_from_document(document, str(path))
+    return model_from_document(read_toml_file(path), str(path))
 
 
 def model_from_document(document: Mapping[str, Any], source: str) -> StateSpaceModelSpec:

@@ -9,11 +9,15 @@ from pathlib import Path
 import click
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import prepare_output_directory, prepare_output_file
 from ornitail.core.output import emit, json_option, to_jsonable
 from ornitail.gap.benchmark import run_benchmark
 from ornitail.gap.example_data import write_example
 from ornitail.gap.report_files import diagnose_files
 from ornitail.gap.report_text import render_report
+
+MAX_SEED = 2**32 - 1
+"""Largest seed accepted (seeds are 0..2**32 - 1)."""
 
 gap_group = click.Group("gap", help="Sim-to-real gap: where it lies, which effect, how far.")
 
@@ -37,7 +41,13 @@ gap_group = click.Group("gap", help="Sim-to-real gap: where it lies, which effec
         "steady-state table (representative_models.csv or tail, x_h_mm, theta_ss_deg, v_ss_m_s)."
     ),
 )
-@click.option("--seed", type=int, default=2018, show_default=True, help="Split and bootstrap seed.")
+@click.option(
+    "--seed",
+    type=click.IntRange(0, MAX_SEED),
+    default=2018,
+    show_default=True,
+    help="Split and bootstrap seed.",
+)
 @click.option(
     "--out",
     type=click.Path(file_okay=False, path_type=Path),
@@ -56,6 +66,7 @@ def diagnose_command(
     as_json: bool,
 ) -> None:
     """Diagnose measured data against a baseline model and write the report."""
+    prepare_output_directory(out)
     report = diagnose_files(model_path, list(data_paths), seed, out, pictures=not no_pictures)
     emit(report, as_json, render_report)
 
@@ -96,7 +107,13 @@ def _parse_effect(text: str) -> tuple[str, float | None]:
     show_default=True,
     help="Doublet manoeuvres in the flight.",
 )
-@click.option("--seed", type=int, default=1, show_default=True, help="Simulation seed.")
+@click.option(
+    "--seed",
+    type=click.IntRange(0, MAX_SEED),
+    default=1,
+    show_default=True,
+    help="Simulation seed.",
+)
 @click.option(
     "--out",
     type=click.Path(file_okay=False, path_type=Path),
@@ -131,7 +148,13 @@ def example_command(
 @click.option(
     "--cases", type=click.IntRange(1, 10000), default=60, show_default=True, help="Number of cases."
 )
-@click.option("--seed", type=int, default=2018, show_default=True, help="Benchmark seed.")
+@click.option(
+    "--seed",
+    type=click.IntRange(0, MAX_SEED),
+    default=2018,
+    show_default=True,
+    help="Benchmark seed.",
+)
 @click.option(
     "--manoeuvres",
     type=click.IntRange(6, 200),
@@ -150,6 +173,8 @@ def benchmark_command(
     cases: int, seed: int, manoeuvres: int, out: Path | None, as_json: bool
 ) -> None:
     """Diagnose simulated flights with known withheld effects, blind, and score the diagnosis."""
+    if out is not None:
+        prepare_output_file(out)
     with click.progressbar(
         length=cases, label="gap benchmark", file=click.get_text_stream("stderr")
     ) as bar:

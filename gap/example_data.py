@@ -20,11 +20,13 @@ import numpy as np
 import pandas as pd
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import prepare_output_directory
 from ornitail.gap.model_spec import BaselineSpec, write_baseline_spec
 from ornitail.gap.steady_data import DEFAULT_SIGMA
 from ornitail.gap.steady_diagnosis import predict_trims
 from ornitail.gap.tunnel_diagnosis import predict_loads
 from ornitail.gap.withheld_effects import WithheldCase, check_effects, simulate_withheld_log
+from ornitail.sim.configuration import study_configuration
 from ornitail.sim.effects import EffectSet
 from ornitail.sim.free_flight import write_flight_log_csv
 
@@ -39,6 +41,8 @@ DEFAULT_MAGNITUDES = {
     "input_delay": 0.06,
     "theta_drift": 0.008,
 }
+MAX_MAGNITUDE_FACTOR = 20.0
+"""An example's effect magnitude may be at most this many times its default (docs/gap-diagnosis.md)."""
 SWEEP_X_H_MM = (57.0, 98.0, 126.0)
 STEADY_SWITCHED = ("wake_profile", "cg_shift_with_x_h", "day_to_day_drift")
 STEADY_TAILS = ("S1", "S2", "S3", "S4", "S5", "S6", "AR1", "AR2", "AR4", "AR5", "AR6")
@@ -123,10 +127,17 @@ def write_example(
         raise UserInputError("--x-h-mm", f"{x_h_mm!r} is not a finite number")
     if kind == "flight":
         check_effects({name: 0.0 if value is None else value for name, value in effects.items()})
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        raise UserInputError(f"--out {folder}", f"cannot create the folder: {error}") from None
+        for name, value in effects.items():
+            limit = MAX_MAGNITUDE_FACTOR * abs(DEFAULT_MAGNITUDES.get(name, 1.0))
+            if value is not None and abs(value) > limit:
+                raise UserInputError(
+                    f"--effect {name}",
+                    f"magnitude {value:g} is beyond +-{limit:g} ({MAX_MAGNITUDE_FACTOR:g} x the "
+                    f"example's {DEFAULT_MAGNITUDES.get(name, 1.0):g})",
+                )
+    if kind == "flight":
+        study_configuration(tail, x_h_mm)  # tail and x_h checked before anything is written
+    prepare_output_directory(folder)
     if kind in ("tunnel", "steady"):
         magnitudes = {name: 1.0 for name in effects}
         if kind == "tunnel":

@@ -13,12 +13,14 @@ effects_off = ["added_mass"]    # simulator effects the baseline leaves out
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import read_toml_file
 from ornitail.core.toml_table import TomlTable
+from ornitail.design.geometry import study_tail_geometry
+from ornitail.flight.model_file import load_model
 from ornitail.sim.effects import EFFECT_NAMES
 
 BASELINE_KINDS = ("simulator", "linear_model")
@@ -53,12 +55,9 @@ def _names(table: TomlTable, key: str, known: tuple[str, ...] | None) -> tuple[s
 def read_baseline_spec(path: str | Path) -> BaselineSpec:
     """Read and check a baseline-model file; every mistake names the file and key."""
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise UserInputError(str(path), "baseline model file not found")
-    try:
-        document = tomllib.loads(path.read_text())
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise UserInputError(str(path), f"not a readable TOML file: {error}") from None
+    document = read_toml_file(path)
     unknown = sorted(set(document) - {"baseline"})
     if unknown:
         raise UserInputError(f"{path}: [{unknown[0]}]", "unknown table; expected [baseline]")
@@ -72,15 +71,18 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
     x_h_mm = table.number("x_h_mm", positive=True)
     if not 20.0 <= x_h_mm <= 300.0:
         raise UserInputError(table.where("x_h_mm"), f"{x_h_mm:g} mm is outside 20-300 mm")
+    tail = table.text("tail")
+    study_tail_geometry(tail, where=table.where("tail"))
     model = ""
     if kind == "linear_model":
         model = table.text("model")
         candidate_file = (path.parent / model).resolve()
-        if candidate_file.is_file():
+        if candidate_file.exists():
             model = str(candidate_file)
+        load_model(model)  # a missing, unreadable or malformed model is refused here, by name
     return BaselineSpec(
         kind=kind,
-        tail=table.text("tail"),
+        tail=tail,
         x_h_mm=x_h_mm,
         effects_off=_names(table, "effects_off", EFFECT_NAMES),
         model=model,

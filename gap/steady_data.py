@@ -22,6 +22,7 @@ import numpy as np
 import pandas as pd
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import read_csv_table
 from ornitail.design.geometry import study_tails
 from ornitail.gap.table_checks import csv_header, finite_column
 
@@ -92,10 +93,7 @@ def read_steady_table(path: Path) -> pd.DataFrame:
 
     Channels without a column (frequency only) are left out. Every mistake names file, column, row.
     """
-    try:
-        table = pd.read_csv(path)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as error:
-        raise UserInputError(str(path), f"not a readable CSV table: {error}") from None
+    table = read_csv_table(path)
     layout = _layout_of(set(table.columns))
     if layout is None:
         raise UserInputError(

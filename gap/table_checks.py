@@ -8,16 +8,24 @@ import numpy as np
 import pandas as pd
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import check_input_file
 
 
 def csv_header(path: str | Path) -> set[str]:
     """Column names of a readable ``.csv`` file; empty for anything else (wrong suffix, unreadable)."""
     path = Path(path)
-    if path.suffix.lower() != ".csv" or not path.is_file():
+    if path.suffix.lower() != ".csv":
         return set()
     try:
+        check_input_file(path)  # a regular file of bounded size, else not a table
         return set(pd.read_csv(path, nrows=0).columns)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, OSError):
+    except (
+        UserInputError,
+        pd.errors.ParserError,
+        pd.errors.EmptyDataError,
+        UnicodeDecodeError,
+        OSError,
+    ):
         return set()
 
 

@@ -19,6 +19,7 @@ import pandas as pd
 from ornitail.acquisition.recording_layout import RUN_METADATA_FILE_NAME
 from ornitail.balance.sweep_table import cycle_averaged_table
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import read_csv_table
 from ornitail.gap.table_checks import csv_header, finite_column
 
 LOAD_COLUMNS = ("x_n", "z_n", "m_n_m")
@@ -51,7 +52,9 @@ def _tables(paths: list[Path]) -> list[tuple[str, pd.DataFrame]]:
     """(label, cycle-average table) per CSV, and one for all run directories together (a tailless run's tares
     and a tailed run's points may sit in different runs of one sweep)."""
     runs = [path for path in paths if is_run_directory(Path(path))]
-    tables = [(str(path), pd.read_csv(path)) for path in paths if not is_run_directory(Path(path))]
+    tables = [
+        (str(path), read_csv_table(path)) for path in paths if not is_run_directory(Path(path))
+    ]
     if runs:
         tables.append((", ".join(str(run) for run in runs), cycle_averaged_table(runs)))
     return tables

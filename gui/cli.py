@@ -2,13 +2,28 @@
 
 from __future__ import annotations
 
+import math
 import os
 import sys
 from pathlib import Path
 
 import click
 
+from ornitail.acquisition.rig_file import read_rig_file
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import prepare_output_directory
+
+
+def check_gui_options(
+    data_root: Path | None, rig_file: Path | None, time_scale: float | None
+) -> None:
+    """Refuse bad options before any window opens: time scale, data root folder, rig file."""
+    if time_scale is not None and not (math.isfinite(time_scale) and time_scale > 0):
+        raise UserInputError("--time-scale", f"{time_scale!r} must be a finite number > 0")
+    if data_root is not None:
+        prepare_output_directory(data_root)
+    if rig_file is not None:
+        read_rig_file(rig_file)
 
 
 @click.command("gui")
@@ -30,6 +45,7 @@ from ornitail.core.errors import UserInputError
 )
 def gui_command(data_root: Path | None, rig_file: Path | None, time_scale: float | None) -> None:
     """Open the desktop window: live view, cycle view, controls, sweeps, runs and design."""
+    check_gui_options(data_root, rig_file, time_scale)
     if sys.platform.startswith("linux") and not any(
         os.environ.get(name) for name in ("DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM")
     ):

@@ -128,7 +128,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.log.add(message.text)
         elif message.kind == "sweep_event":
             self.sweep_panel.show_event(message.payload)
-            if message.payload.stage in ("recorded", "tail_change"):
+            if message.payload.stage in ("recorded", "tail_change", "warning"):
                 self.log.add(message.text)
         elif message.kind == "sweep_done":
             self.sweep_panel.show_done(message.payload)

@@ -427,5 +427,7 @@ class RigSession:
 
 
 def _event_text(event: SweepEvent) -> str:
+    if event.message:  # a warning: saturated samples, or samples still lost after the retakes
+        return event.message
     point = "" if event.set_point is None else f" {event.set_point.label}"
     return f"{event.stage}{point} ({event.completed}/{event.total})"

@@ -31,7 +31,7 @@ Z_95 = 1.959963984540054
 
 def _catalog_row(run: CatalogEntry) -> tuple[str, ...]:
     x_h = "-" if run.x_h_m is None else f"{run.x_h_m * 1000:g}"
-    lost = run.queue_lost_samples + run.link_lost_samples
+    lost = run.lost_samples  # counted once, as `ornitail runs` counts them
     return (
         run.run_id,
         run.exit_status,

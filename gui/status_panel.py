@@ -11,6 +11,42 @@ OK_STYLE = "color: #1a7f37;"
 WARN_STYLE = "color: white; background: #cf222e; font-weight: bold; padding: 0 4px;"
 
 
+def link_health_text(health: LinkHealth) -> tuple[str, bool]:
+    """The link label's text and whether it is a warning.
+
+    Lost samples are those of the current (or last) recording, counted as ``ornitail runs`` and the sweep
+    report count them: the samples its counters say are missing in its file, each once.
+    """
+    where = "" if health.recording_run_id is None else f" in {health.recording_run_id}"
+    text = (
+        f"link: lost samples {health.recording_lost_samples}{where}, CRC errors {health.crc_errors}, "
+        f"garbage bytes {health.garbage_bytes} in {health.resyncs} resyncs, "
+        f"dropped blocks {health.driver_dropped_blocks}"
+    )
+    bad = bool(
+        health.recording_lost_samples
+        or health.link_lost_samples
+        or health.recorder_lost_samples
+        or health.crc_errors
+        or health.garbage_bytes
+        or health.driver_dropped_blocks
+    )
+    return text, bad
+
+
+def saturation_text(health: LinkHealth) -> tuple[str, bool]:
+    """The saturation label's text (channels at the ADC limit, rows over the rated load) and whether it warns."""
+    saturated = health.saturated_channels
+    parts = []
+    if saturated:
+        parts.append("SATURATED: " + ", ".join(saturated))
+    if health.over_range_samples:
+        parts.append(f"OVER RATED LOAD: {health.over_range_samples} samples")
+    if not parts and health.saturated_samples:
+        parts.append(f"SATURATED: {health.saturated_samples} samples (board over-range flag)")
+    return ("; ".join(parts), True) if parts else ("no saturation", False)
+
+
 class StatusPanel(QtWidgets.QWidget):
     """Labels updated by :meth:`refresh` at every redraw."""
 
@@ -73,15 +109,9 @@ class StatusPanel(QtWidgets.QWidget):
             self.link.setText("link: -")
             self.saturation.setText("saturation: -")
             return
-        lost = health.link_lost_samples + health.recorder_lost_samples
-        self.link.setText(
-            f"link: CRC errors {health.crc_errors}, lost samples {health.link_lost_samples}, "
-            f"recorder lost {health.recorder_lost_samples}, dropped blocks {health.driver_dropped_blocks}"
-        )
-        bad = lost or health.crc_errors or health.driver_dropped_blocks
+        text, bad = link_health_text(health)
+        self.link.setText(text)
         self.link.setStyleSheet(WARN_STYLE if bad else OK_STYLE)
-        saturated = health.saturated_channels
-        self.saturation.setText(
-            "SATURATED: " + ", ".join(saturated) if saturated else "no saturation"
-        )
+        text, saturated = saturation_text(health)
+        self.saturation.setText(text)
         self.saturation.setStyleSheet(WARN_STYLE if saturated else OK_STYLE)

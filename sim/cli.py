@@ -9,11 +9,15 @@ from typing import Any
 import click
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.input_files import prepare_output_file
 from ornitail.core.output import emit, json_option
 from ornitail.sim.configuration import study_configuration
 from ornitail.sim.dynamics import TrimNotFoundError, linearise
 from ornitail.sim.effects import EffectSet
 from ornitail.sim.free_flight import FlightPlan, simulate_flight, write_flight_log_csv
+
+MAX_SEED = 2**32 - 1
+"""Largest random seed accepted (seeds are 0..2**32 - 1)."""
 
 sim_group = click.Group("sim", help="Physics simulator of the DelFly II with its tail.")
 
@@ -82,7 +86,11 @@ def trim_command(tail: str, x_h_mm: float, as_json: bool) -> None:
     "--duration-s", type=float, default=60.0, show_default=True, help="Flight length in s."
 )
 @click.option(
-    "--seed", type=int, default=0, show_default=True, help="Random seed (gusts, noise, turns)."
+    "--seed",
+    type=click.IntRange(0, MAX_SEED),
+    default=0,
+    show_default=True,
+    help="Random seed (gusts, noise, turns).",
 )
 @click.option(
     "--out", type=click.Path(dir_okay=False, path_type=Path), required=True, help="CSV to write."
@@ -95,6 +103,7 @@ def flight_command(
     if not (math.isfinite(duration_s) and 1.0 <= duration_s <= 3600.0):
         raise UserInputError("--duration-s", f"value {duration_s!r} is outside 1..3600 s")
     configuration = study_configuration(tail, x_h_mm)
+    prepare_output_file(out)
     try:
         log = simulate_flight(
             configuration, EffectSet(), FlightPlan(duration_s=duration_s), seed=seed

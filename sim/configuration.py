@@ -72,6 +72,8 @@ def study_configuration(tail_name: str, x_h_mm: float) -> VehicleConfiguration:
     tail = study_tail_geometry(tail_name, where="--tail")
     if not math.isfinite(x_h_mm):
         raise UserInputError("--x-h-mm", f"value {x_h_mm!r} is not a finite number")
+    if not 20.0 <= x_h_mm <= 300.0:
+        raise UserInputError("--x-h-mm", f"tail position {x_h_mm:g} mm is outside 20-300 mm")
     return VehicleConfiguration(tail=tail, x_h_m=x_h_mm / 1000.0, name=f"{tail_name}@{x_h_mm:g}mm")
 
 

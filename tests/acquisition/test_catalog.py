@@ -14,7 +14,12 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from ornitail.acquisition.catalog import CATALOG_FILE_NAME, RunCatalog, RunFilter
+from ornitail.acquisition.catalog import (
+    CATALOG_FILE_NAME,
+    CATALOG_SCHEMA_VERSION,
+    RunCatalog,
+    RunFilter,
+)
 from ornitail.acquisition.recorder import Recorder
 from ornitail.acquisition.recording_layout import (
     ChannelSpec,
@@ -79,7 +84,7 @@ def test_catalog_is_in_wal_mode_and_schema_is_versioned(tmp_path):
     catalog = RunCatalog(tmp_path)
     assert catalog.journal_mode() == "wal"
     with sqlite3.connect(tmp_path / CATALOG_FILE_NAME) as connection:
-        assert connection.execute("PRAGMA user_version").fetchone()[0] == 1
+        assert connection.execute("PRAGMA user_version").fetchone()[0] == CATALOG_SCHEMA_VERSION
 
 
 def test_run_is_registered_at_start_updated_per_set_point_and_at_stop(tmp_path):
@@ -90,6 +95,7 @@ def test_run_is_registered_at_start_updated_per_set_point_and_at_stop(tmp_path):
         calibration_files={"nano17": CALIBRATION_FILE},
     )
     with recorder:
+        assert recorder.wait_for_catalog(timeout_s=30)  # the row is written from its own thread
         at_start = RunCatalog(tmp_path).get_run(recorder.run_id)
         assert (at_start.exit_status, at_start.sample_count, at_start.set_point_count) == (
             "running",

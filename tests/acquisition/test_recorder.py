@@ -114,7 +114,14 @@ def test_round_trip_keeps_every_raw_value_counter_set_point_and_metadata(tmp_pat
     assert metadata["stream"]["channels"][6] == {"name": "hall_sensor", "unit": "V"}
     assert metadata["bias_voltages_v"] == {"gauge_0": 0.0125, "gauge_1": -0.003}
     assert metadata["calibration_files"]["nano17"]["hash"].startswith("sha256:")
-    assert metadata["link_health"] == {"crc_errors": 4, "lost_samples": 7, "report_count": 2}
+    assert metadata["link_health"] == {
+        "crc_errors": 4,
+        "lost_samples": 7,
+        "garbage_bytes": 0,
+        "resyncs": 0,
+        "foreign_frames": 0,
+        "report_count": 2,
+    }
     assert metadata["counter_gaps"]["count"] == 0
     assert metadata["stop_time_utc"] >= metadata["start_time_utc"]
     assert metadata["set_point_summary"]["tare_count"] == 1

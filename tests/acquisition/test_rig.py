@@ -112,7 +112,7 @@ def test_missing_section_and_bad_toml(tmp_path):
     path.write_text("[rig\n")
     with pytest.raises(UserInputError, match="rig.toml: not valid TOML"):
         read_rig_file(path)
-    with pytest.raises(UserInputError, match="cannot read rig file"):
+    with pytest.raises(UserInputError, match="absent.toml: file not found"):
         read_rig_file(tmp_path / "absent.toml")
 
 

@@ -130,3 +130,42 @@ def test_opening_a_missing_port_names_the_instrument(tmp_path):
     driver = SerialDaqDriver(str(tmp_path / "ttyNOPE"), name="balance DAQ")
     with pytest.raises(InstrumentDisconnected, match="balance DAQ: cannot open"):
         driver.open()
+
+
+def wait_for(condition, timeout_s=30.0):
+    deadline = time.monotonic() + timeout_s
+    while not condition():
+        assert time.monotonic() < deadline, "condition not met within the deadline"
+        time.sleep(0.01)
+
+
+def test_a_board_left_streaming_by_a_crashed_host_is_stopped_drained_and_identified(simulated_daq):
+    """A host that died mid-stream leaves the board streaming into the port: open() sends STOP, drains the stream
+    and the board's full FIFO, then identifies the board; the next stream continues the board's counters."""
+    import serial
+
+    crashed_host = serial.Serial(simulated_daq.port_path, 4_000_000, timeout=0.05)
+    crashed_host.write(b"START\n")
+    wait_for(
+        lambda: simulated_daq.samples_sent > 20_000
+    )  # frames queued in the pty and the board's FIFO
+    crashed_host.close()  # no STOP: the process is gone
+    driver = SerialDaqDriver(simulated_daq.port_path, name="test DAQ")
+    try:
+        identity = driver.open()
+        assert identity.model == "ORNI-DAQ9"
+        assert driver.stale_bytes_discarded > 25 * 1000
+        driver.start()
+        counters, _ = collect(driver, 200)
+        driver.stop()
+    finally:
+        driver.close()
+    assert np.all(np.diff(counters.astype(np.int64)) == 1)
+    assert counters[0] > 20_000  # the board's counter went on; nothing was mistaken for a reply
+
+
+def test_a_reply_with_binary_bytes_is_named_by_size_not_printed():
+    from ornitail.acquisition.serial_port_access import printable_excerpt
+
+    assert printable_excerpt(bytes(range(256)) * 100) == "25600 bytes of binary data"
+    assert printable_excerpt(b"ID model=X\n") == "'ID model=X'"

@@ -249,18 +249,20 @@ def test_records_longer_than_the_remembered_blocks_are_checked_whole(
 def test_a_record_kept_with_a_gap_is_journalled_and_refused_by_processing(
     simulated_rig, tmp_path, monkeypatch
 ):
-    """With no retakes allowed the first measurement keeps its gap: the journal says how many samples it lost, and
-    processing names the run and the set point instead of timing cycles across the gap."""
+    """With no retakes allowed the first measurement keeps its gap: the journal says how many samples it lost, the
+    sweep ends incomplete naming it, and processing names the run and the set point instead of timing cycles
+    across the gap."""
     monkeypatch.setattr(sweep, "MAX_RETAKES", 0)
     on_event, dropping = drops_after_the_first_point_settles(simulated_rig, kind="measurement")
     result = run_sweep(short_plan(), simulated_rig, tmp_path, on_event=on_event)
-    assert result.status == "completed" and dropping.wait(timeout=30)
+    assert result.status == "incomplete" and dropping.wait(timeout=30)
     tailed = result.run_directories[0]
     frame = load_recording(tailed).set_points_frame()
     first_measurement = frame[frame["kind"] == "measurement"].iloc[0]
     assert (
         first_measurement["retakes"] == 0 and first_measurement["samples_missing_in_record"] >= 25
     )
+    assert int(first_measurement["plan_point_index"]) in result.incomplete_points
     with pytest.raises(UserInputError, match="samples lost inside the record") as refused:
         cycle_averaged_table(result.run_directories)
     assert str(tailed) in str(refused.value)

@@ -110,7 +110,7 @@ def test_missing_required_field_and_bad_file_are_named(tmp_path):
     broken.write_text("[steady_state\ntheta_deg = 3")
     with pytest.raises(UserInputError, match="broken.toml: not valid TOML"):
         load_plan(broken)
-    with pytest.raises(UserInputError, match="absent.toml: cannot read plan"):
+    with pytest.raises(UserInputError, match="absent.toml: file not found"):
         load_plan(tmp_path / "absent.toml")
 
 

@@ -230,5 +230,5 @@ def test_format_1_1_without_user_axis_rows_is_refused(cal_file_path, tmp_path):
 
 
 def test_missing_file_is_a_user_error(tmp_path):
-    with pytest.raises(UserInputError, match="cannot read file"):
+    with pytest.raises(UserInputError, match="absent.cal: file not found"):
         AtiCalibration.from_file(tmp_path / "absent.cal")

@@ -164,7 +164,7 @@ def _edited_ft8884(tmp_path, old, new):
 BAD_INPUTS = {
     "missing cal file": (
         lambda t: ["convert", "--cal", t / "absent.cal", "--volts", VOLTS],
-        ["absent.cal", "cannot read file"],
+        ["absent.cal", "file not found"],
     ),
     "malformed xml": (
         lambda t: ["show", "--cal", _write(t, "bad.cal", "<FTSensor><Calib")],

@@ -190,7 +190,7 @@ def test_law_files_round_trip_with_the_file_hash(tmp_path, suffix, law_name):
     ("content", "suffix", "words"),
     [
         ('law = "king"\n', ".toml", "missing"),
-        ("{not json", ".json", "not a valid JSON"),
+        ("{not json", ".json", "not valid JSON"),
         (json.dumps({"law": "cubic"}), ".json", "missing"),
         ("law = 3", ".yaml", "must end in .toml or .json"),
     ],

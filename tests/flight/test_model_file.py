@@ -120,7 +120,7 @@ def test_mistakes_name_file_and_field(tmp_path, old, new, where, problem):
 def test_missing_file_and_bad_toml_are_user_errors(tmp_path):
     with pytest.raises(UserInputError, match="not a preset name"):
         load_model(tmp_path / "nothing.toml")
-    with pytest.raises(UserInputError, match="not a valid TOML"):
+    with pytest.raises(UserInputError, match="not valid TOML"):
         load_model(write_model(tmp_path, "[model\nstates = 1"))
 
 
