@@ -22,6 +22,7 @@ import re
 import socket
 import sys
 import tempfile
+import time
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -93,6 +94,35 @@ def read_holder(path: Path) -> LockHolder | None:
     )
 
 
+def _alive(holder: LockHolder) -> bool:
+    """True unless the holder ran on this host and its process is gone."""
+    if holder.pid is None or (holder.host and holder.host != socket.gethostname()):
+        return True
+    try:
+        os.kill(holder.pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's live process
+        return True
+    return True
+
+
+def current_holder(path: Path, wait_s: float = 1.0) -> LockHolder | None:
+    """The holder of a lock that was just found held: the record it wrote, once it names a live process.
+
+    A new holder writes its record right after taking the lock; until then the file may still name a dead
+    previous holder, so a stale record is read again for up to ``wait_s``; None if no live holder shows up.
+    """
+    deadline = time.monotonic() + wait_s
+    while True:
+        holder = read_holder(path)
+        if holder is not None and _alive(holder):
+            return holder
+        if time.monotonic() >= deadline:
+            return None
+        time.sleep(0.02)
+
+
 class ExclusiveLock:
     """An exclusive, non-blocking ``flock`` on the file ``path``, held until :meth:`release` or process death.
 
@@ -129,7 +159,7 @@ class ExclusiveLock:
             except OSError as error:
                 os.close(fd)
                 if error.errno in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
-                    raise LockHeld(self.path, read_holder(self.path)) from None
+                    raise LockHeld(self.path, current_holder(self.path)) from None
                 raise
         self._fd = fd
         self._since_utc = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")

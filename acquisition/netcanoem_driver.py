@@ -144,43 +144,47 @@ class NetCanOemDriver:
 
     # -- connection -------------------------------------------------------------------------
     def open(self) -> str:
-        """Take the channel's lock, open the bus, drain stale frames, return the board's serial number.
+        """Open the bus, take the channel's lock, drain stale frames, return the board's serial number.
 
         The lock (a lock file per interface and channel, released by the OS when the process dies) keeps a
-        second ornitail process off the board (python-can's in-process ``virtual`` bus needs none). Replies
+        second ornitail process off the board (python-can's in-process ``virtual`` bus needs none); it is taken
+        once the bus opened (no lock file for a channel that is not there) and before anything is sent. Replies
         still on the bus from a host that crashed while polling are read and dropped until the bus has been
         quiet for ``OPEN_QUIET_S`` (at most ``OPEN_DRAIN_LIMIT_S``), so none is taken for an answer.
         """
-        if self.interface != "virtual":
-            lock = device_lock(f"can-{self.interface}-{self.channel}")
-            try:
-                lock.acquire(detail=f"{self.name} on {self.interface}:{self.channel}")
-            except LockHeld as held:
-                holder = held.holder.describe() if held.holder else "another process"
-                raise InstrumentInUse(
-                    self.name,
-                    f"CAN channel {self.interface}:{self.channel} is in use by {holder}; stop it or wait",
-                ) from None
-            except OSError:
-                lock = None  # the lock folder is not usable; open without it
-            self._channel_lock = lock
         try:
             self._bus = can.Bus(
                 interface=self.interface, channel=self.channel, bitrate=int(self.bit_rate)
             )
         except (can.CanError, OSError, ValueError, ImportError) as error:
-            self.close()
             raise InstrumentDisconnected(
                 self.name,
                 f"cannot open CAN interface {self.interface!r} channel {self.channel!r}: "
                 f"{str(error).splitlines()[0] if str(error) else type(error).__name__}",
             ) from None
         try:
+            if self.interface != "virtual":
+                self._take_channel_lock()
             self._discard_stale_frames()
             return self.read_serial_number()
         except BaseException:
             self.close()
             raise
+
+    def _take_channel_lock(self) -> None:
+        """Lock this interface and channel for this process (InstrumentInUse naming the holder)."""
+        lock: ExclusiveLock | None = device_lock(f"can-{self.interface}-{self.channel}")
+        try:
+            lock.acquire(detail=f"{self.name} on {self.interface}:{self.channel}")
+        except LockHeld as held:
+            holder = held.holder.describe() if held.holder else "another process"
+            raise InstrumentInUse(
+                self.name,
+                f"CAN channel {self.interface}:{self.channel} is in use by {holder}; stop it or wait",
+            ) from None
+        except OSError:
+            lock = None  # the lock folder is not usable; go on without it
+        self._channel_lock = lock
 
     def _discard_stale_frames(self) -> None:
         """Drop frames with the board's ids until none came for ``OPEN_QUIET_S`` (bounded by ``OPEN_DRAIN_LIMIT_S``)."""

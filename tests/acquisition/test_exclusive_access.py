@@ -127,3 +127,27 @@ def test_a_second_sweep_of_a_chain_being_recorded_is_refused_naming_the_run(tmp_
     with Rig.from_file(time_scale=5.0) as rig_b:
         again = run_sweep(plan, rig_b, tmp_path, resume=True)
     assert "nothing to do" in again.message
+
+
+def test_a_record_left_by_a_dead_holder_is_never_named(tmp_path):
+    """A new holder writes its record just after taking the lock; a refusal in between must not name the dead
+    process whose record is still in the file."""
+    finished = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True
+    )
+    dead_pid = int(finished.stdout)
+    path = tmp_path / "chain.lock"
+    lock = ExclusiveLock(path)
+    lock.acquire()
+    record = (
+        f'{{"pid": {dead_pid}, "host": "{os.uname().nodename}", "command": "old", "since_utc": ""}}'
+    )
+    path.write_text(record)  # as if the new holder had not written its own record yet
+    with pytest.raises(LockHeld) as held:
+        ExclusiveLock(path).acquire()
+    assert held.value.holder is None and "another process" in str(held.value)
+    lock.update_detail("now")
+    with pytest.raises(LockHeld) as held:
+        ExclusiveLock(path).acquire()
+    assert held.value.holder.pid == os.getpid()
+    lock.release()
