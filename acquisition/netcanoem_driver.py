@@ -244,6 +244,22 @@ class NetCanOemDriver:
         except (can.CanError, OSError) as error:
             raise InstrumentDisconnected(self.name, f"CAN bus error on send: {error}") from None
 
+    def _receive_message(self, timeout_s: float) -> can.Message | None:
+        """The next frame that is not an error frame (those are counted), or None when none arrives
+        within ``timeout_s`` seconds."""
+        assert self._bus is not None
+        deadline = time.monotonic() + timeout_s
+        while True:
+            try:
+                message = self._bus.recv(max(0.0, deadline - time.monotonic()))
+            except (can.CanError, OSError) as error:
+                raise InstrumentDisconnected(
+                    self.name, f"CAN bus error on receive: {error}"
+                ) from None
+            if message is None or not message.is_error_frame:
+                return message
+            self.error_frames += 1
+
     def _receive(self, wanted: dict[int, int], timeout_s: float) -> dict[int, bytes] | None:
         """Collect one reply per opcode in ``wanted`` (opcode -> DLC); None on timeout."""
         assert self._bus is not None
@@ -253,17 +269,9 @@ class NetCanOemDriver:
             remaining = deadline - time.monotonic()
             if remaining <= 0:
                 return None
-            try:
-                message = self._bus.recv(remaining)
-            except (can.CanError, OSError) as error:
-                raise InstrumentDisconnected(
-                    self.name, f"CAN bus error on receive: {error}"
-                ) from None
+            message = self._receive_message(remaining)
             if message is None:
                 return None
-            if message.is_error_frame:
-                self.error_frames += 1
-                continue
             if message.is_extended_id or message.is_remote_frame:
                 continue
             base_id, opcode = protocol.split_arbitration_id(message.arbitration_id)
@@ -286,17 +294,10 @@ class NetCanOemDriver:
         outstanding, so they are foreign or late)."""
         assert self._bus is not None
         while True:
-            try:
-                message = self._bus.recv(0.0)
-            except (can.CanError, OSError) as error:
-                raise InstrumentDisconnected(
-                    self.name, f"CAN bus error on receive: {error}"
-                ) from None
+            message = self._receive_message(0.0)
             if message is None:
                 return
-            if message.is_error_frame:
-                self.error_frames += 1
-            elif self._is_board_frame(message):
+            if self._is_board_frame(message):
                 self.foreign_frames += 1
 
     def _receive_gauge_sample(self, timeout_s: float) -> tuple[int, np.ndarray] | None | bool:
@@ -310,17 +311,9 @@ class NetCanOemDriver:
             remaining = deadline - time.monotonic()
             if remaining <= 0:
                 return None
-            try:
-                message = self._bus.recv(remaining)
-            except (can.CanError, OSError) as error:
-                raise InstrumentDisconnected(
-                    self.name, f"CAN bus error on receive: {error}"
-                ) from None
+            message = self._receive_message(remaining)
             if message is None:
                 return None
-            if message.is_error_frame:
-                self.error_frames += 1
-                continue
             if not self._is_board_frame(message):
                 continue
             opcode = protocol.split_arbitration_id(message.arbitration_id)[1]

@@ -69,7 +69,7 @@ from ornitail.acquisition.recording_layout import (
     StreamLayout,
     summarize_set_points,
 )
-from ornitail.acquisition.recording_reader import MAX_STORED_GAP_POSITIONS
+from ornitail.acquisition.recording_reader import MAX_STORED_GAP_POSITIONS, set_point_saturation
 from ornitail.acquisition.run_files import RunLock, append_journal_line, write_json_atomically
 from ornitail.core.errors import UserInputError
 from ornitail.core.hashing import content_hash_of_file
@@ -589,27 +589,13 @@ class Recorder:
 
     def _saturation_summary(self) -> dict[str, Any]:
         """Flagged rows of the set points journalled so far, and of the whole stream (``run.json``)."""
-        affected = [
-            {
-                "set_point_index": record.set_point_index,
-                "plan_point_index": record.plan_point_index,
-                "kind": record.kind,
-                "saturated_samples": record.saturated_samples,
-                "over_range_samples": record.over_range_samples,
-            }
-            for record in self._set_points
-            if record.is_flagged
-        ]
         with self._flag_lock:
             checked = self._flags_checked
             stream_saturated = self._flagged_rows[ROW_FLAG_SATURATED].total
             stream_over_range = self._flagged_rows[ROW_FLAG_OVER_RATED_RANGE].total
         return {
             "checked": checked,
-            "saturated_samples": sum(int(r.saturated_samples or 0) for r in self._set_points),
-            "over_range_samples": sum(int(r.over_range_samples or 0) for r in self._set_points),
-            "affected_set_points": affected[:MAX_STORED_GAP_POSITIONS],
-            "affected_set_point_count": len(affected),
+            **set_point_saturation(self._set_points),
             "stream_saturated_samples": stream_saturated,
             "stream_over_range_samples": stream_over_range,
         }

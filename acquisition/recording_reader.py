@@ -259,11 +259,9 @@ def _metadata_from_files(recording: Recording) -> dict[str, Any]:
     return metadata
 
 
-def _saturation_from_journal(
-    set_points: list[SetPointRecord], at_start: dict[str, Any]
-) -> dict[str, Any]:
-    """The ``saturation`` block of a run without a stop record, from its journalled set points (the stream
-    totals were last written at start and are kept as they were)."""
+def set_point_saturation(set_points: list[SetPointRecord]) -> dict[str, Any]:
+    """Flagged rows summed over ``set_points`` and the flagged set points (at most
+    MAX_STORED_GAP_POSITIONS listed): the per-set-point part of ``run.json``'s ``saturation``."""
     affected = [
         {
             "set_point_index": record.set_point_index,
@@ -276,11 +274,21 @@ def _saturation_from_journal(
         if record.is_flagged
     ]
     return {
-        **at_start,
-        "checked": bool(at_start.get("checked"))
-        or any(record.saturated_samples is not None for record in set_points),
         "saturated_samples": sum(int(record.saturated_samples or 0) for record in set_points),
         "over_range_samples": sum(int(record.over_range_samples or 0) for record in set_points),
         "affected_set_points": affected[:MAX_STORED_GAP_POSITIONS],
         "affected_set_point_count": len(affected),
+    }
+
+
+def _saturation_from_journal(
+    set_points: list[SetPointRecord], at_start: dict[str, Any]
+) -> dict[str, Any]:
+    """The ``saturation`` block of a run without a stop record, from its journalled set points (the stream
+    totals were last written at start and are kept as they were)."""
+    return {
+        **at_start,
+        "checked": bool(at_start.get("checked"))
+        or any(record.saturated_samples is not None for record in set_points),
+        **set_point_saturation(set_points),
     }
