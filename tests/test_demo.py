@@ -46,6 +46,15 @@ def test_demo_records_the_study_protocol_and_prints_cycle_averaged_loads(tmp_pat
     assert abs(contribution["x_n"] - true_tail_x_n) < 5e-3
     assert abs(steady["tailed"]["z_n"] - truth[True].aero_z_n) < 5e-3
     assert contribution["x_n_resolvable"] is True
+    # Beside each result, its distance to the simulator's truth (`ornitail sim tunnel`) in its own sigmas.
+    compared = result["truth"]
+    assert compared["tail_X"]["truth"] == pytest.approx(true_tail_x_n, rel=1e-9)
+    assert compared["Z0"]["truth"] == pytest.approx(truth[True].aero_z_n, rel=1e-9)
+    assert {"Xu", "Zu", "Mu", "Xw", "Zw", "Mw"} <= set(compared)
+    for entry in compared.values():
+        error = (entry["estimate"] - entry["truth"]) / entry["sigma"]
+        assert entry["error_in_sigmas"] == pytest.approx(error)
+        assert entry["agrees"] is bool(abs(error) <= 2.0)
 
     # The last stage: a tail proposed from the simulated flight campaign and the tunnel derivatives.
     design = result["design"]
