@@ -141,6 +141,7 @@ class SweepPlan:
     sample_rate_hz: float
     settle: SettleCriteria
     source: str = "<plan>"
+    bracketing_tares: bool = False
     set_points: tuple[SetPoint, ...] = field(default=(), compare=False)
 
     def configuration_record(self) -> dict[str, Any]:
@@ -218,6 +219,7 @@ def plan_from_document(document: dict[str, Any], source: str = "<plan>") -> Swee
             "sweep_repeats",
             "tailless_points",
             "wind_off_tares",
+            "bracketing_tares",
             "record_s",
             "sample_rate_hz",
         },
@@ -286,7 +288,13 @@ def plan_from_document(document: dict[str, Any], source: str = "<plan>") -> Swee
         sample_rate_hz=protocol.number("sample_rate_hz", 10_000.0, positive=True),
         settle=settle,
         source=source,
+        bracketing_tares=protocol.boolean("bracketing_tares", False),
     )
+    if plan.bracketing_tares and not plan.wind_off_tares:
+        raise UserInputError(
+            protocol.where("bracketing_tares"),
+            "true needs wind_off_tares = true (the tares it adds after each block bracket the tares before it)",
+        )
     if not MIN_SAMPLE_RATE_HZ <= plan.sample_rate_hz <= MAX_SAMPLE_RATE_HZ:
         raise UserInputError(
             protocol.where("sample_rate_hz"),
@@ -335,7 +343,8 @@ def set_point_count(plan: SweepPlan) -> int:
             total += sweep_points * plan.sweep_repeats
         if plan.wind_off_tares:
             pitch_offsets = plan.sweep_offsets.get("theta", ()) if with_sweeps else ()
-            total += len({plan.theta0_rad, *(plan.theta0_rad + o for o in pitch_offsets)})
+            pitches = len({plan.theta0_rad, *(plan.theta0_rad + o for o in pitch_offsets)})
+            total += pitches * (2 if plan.bracketing_tares else 1)
     return total
 
 
@@ -398,29 +407,32 @@ def _measurements_for_tail_state(plan: SweepPlan, tail_attached: bool) -> list[d
 
 
 def _with_set_points(plan: SweepPlan) -> SweepPlan:
-    """Expand the plan: for each tail state, each pitch in increasing order gets its tare, then its points."""
+    """Expand the plan: for each tail state, each pitch in increasing order gets its tare, then its points (then,
+    with ``bracketing_tares``, a second tare at the same pitch, so the balance's drift across the block is
+    measured)."""
     tail_states = [True] if plan.tailless_points == "none" else [True, False]
     ordered: list[dict[str, Any]] = []
     for tail_attached in tail_states:
         measurements = _measurements_for_tail_state(plan, tail_attached)
         for pitch_rad in sorted({point["pitch_rad"] for point in measurements}):
+            tare = {
+                "kind": "tare",
+                "sweep": "tare",
+                "repeat": 0,
+                "pitch_rad": pitch_rad,
+                "tunnel_velocity_m_s": 0.0,
+                "flapping_frequency_hz": 0.0,
+                "tail_attached": tail_attached,
+            }
             if plan.wind_off_tares:
-                ordered.append(
-                    {
-                        "kind": "tare",
-                        "sweep": "tare",
-                        "repeat": 0,
-                        "pitch_rad": pitch_rad,
-                        "tunnel_velocity_m_s": 0.0,
-                        "flapping_frequency_hz": 0.0,
-                        "tail_attached": tail_attached,
-                    }
-                )
+                ordered.append(tare)
             ordered.extend(
                 {**point, "kind": "measurement", "tail_attached": tail_attached}
                 for point in measurements
                 if point["pitch_rad"] == pitch_rad
             )
+            if plan.bracketing_tares:
+                ordered.append({**tare, "repeat": 1})
     set_points = tuple(
         SetPoint(index=index, record_s=plan.record_s, **point)
         for index, point in enumerate(ordered)

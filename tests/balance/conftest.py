@@ -1,9 +1,10 @@
 """Sweeps processed straight from the simulator's signals (no real-time rig), and the simulator's own truth.
 
 A sweep here is one continuous :class:`TunnelSignalSource` visiting the set points of a plan in the plan's
-order (wind-off tare at each pitch, then that pitch's measurements), so effects that accumulate over a sweep
-(the balance warming while the motor runs) accumulate as on the rig. Each record goes through the same
-functions as ``ornitail process`` (:func:`tare_volts_and_error`, :func:`cycle_averaged_loads`).
+order (wind-off tare at each pitch, then that pitch's measurements, then, with ``bracketing_tares``, a second
+tare), so effects that accumulate over a sweep (the balance warming while the motor runs) accumulate as on the
+rig. Each record goes through the same functions as ``ornitail process`` (:func:`tare_volts_and_error`,
+:func:`tare_correction`, :func:`cycle_averaged_loads`), the stream's sample count being the run's clock.
 """
 
 import math
@@ -15,7 +16,13 @@ import pandas as pd
 import pytest
 
 from ornitail.acquisition.sweep_plan import SweepPlan, load_plan
-from ornitail.balance.point_loads import cycle_averaged_loads, tare_volts_and_error
+from ornitail.balance.point_loads import (
+    BODY_LOAD_NAMES,
+    cycle_averaged_loads,
+    propagated_standard_error,
+    tare_volts_and_error,
+)
+from ornitail.balance.tare_drift import RecordedTare, tare_correction
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.calibration.tool_transform import ToolTransform
 from ornitail.sim.configuration import study_configuration
@@ -41,8 +48,8 @@ class SimulatedSweep:
         """The cycle-averaged table of one simulated sweep (columns as ``cycle_averaged_table``)."""
         source = TunnelSignalSource(self.configuration, self.effects, seed=seed)
         record_samples = int(round((record_s or self.plan.record_s) * SAMPLE_RATE_HZ))
-        tares = {}
-        rows = []
+        records = []  # (point, block, middle sample on the stream's counter)
+        stream_samples = 0
         for point in self.plan.set_points:
             source.set_operating_point(
                 pitch_rad=point.pitch_rad,
@@ -51,19 +58,50 @@ class SimulatedSweep:
                 tail_attached=point.tail_attached,
             )
             source.next_block(SETTLE_SAMPLES)
-            block = source.next_block(record_samples)
-            key = (point.tail_attached, point.pitch_rad)
+            records.append(
+                (
+                    point,
+                    source.next_block(record_samples),
+                    stream_samples + SETTLE_SAMPLES + record_samples / 2,
+                )
+            )
+            stream_samples += SETTLE_SAMPLES + record_samples
+        tares = [
+            (
+                point,
+                RecordedTare(
+                    f"tare#{point.index}", "sweep", middle, *tare_volts_and_error(block[:, :6])
+                ),
+            )
+            for point, block, middle in records
+            if point.kind == "tare"
+        ]
+        rows = []
+        for point, block, middle in records:
             if point.kind == "tare":
-                tares[key] = tare_volts_and_error(block[:, :6])
                 continue
-            tare_volts, tare_error = tares[key]
+            same = [
+                (tare_point, tare)
+                for tare_point, tare in tares
+                if (tare_point.tail_attached, tare_point.pitch_rad)
+                == (point.tail_attached, point.pitch_rad)
+            ]
+            before = [tare for tare_point, tare in same if tare_point.index < point.index][-1]
+            after = next(
+                (tare for tare_point, tare in same if tare_point.index > point.index), None
+            )
+            correction = tare_correction(before, after, middle, "sweep")
             loads = cycle_averaged_loads(
                 block[:, :6],
                 block[:, 8],
                 SAMPLE_RATE_HZ,
-                tare_volts,
+                correction.volts,
                 self.calibration,
-                tare_volts_standard_error=tare_error,
+                tare_volts_standard_error=correction.volts_standard_error,
+            )
+            before_se = propagated_standard_error(self.calibration, before.volts_standard_error)
+            after_se = propagated_standard_error(
+                self.calibration, np.zeros(6) if after is None else after.volts_standard_error
             )
             rows.append(
                 {
@@ -75,8 +113,18 @@ class SimulatedSweep:
                     "theta_deg": math.degrees(point.pitch_rad),
                     "v_m_s": point.tunnel_velocity_m_s,
                     "f_set_hz": point.flapping_frequency_hz,
-                    "tare_id": f"{point.tail_attached}@{point.pitch_rad:.6f}",
+                    "tare_id": before.tare_id,
+                    "tare_after_id": "" if after is None else after.tare_id,
+                    "tare_after_weight": correction.after_weight,
                     **loads.as_record(),
+                    **{
+                        f"{name}_tare_before_se": before_se[index]
+                        for index, name in enumerate(BODY_LOAD_NAMES)
+                    },
+                    **{
+                        f"{name}_tare_after_se": after_se[index]
+                        for index, name in enumerate(BODY_LOAD_NAMES)
+                    },
                 }
             )
         return pd.DataFrame(rows)

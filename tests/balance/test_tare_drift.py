@@ -1,0 +1,69 @@
+"""Bracketing tares: the interpolated zero, its error, and the covariance of points that share tares."""
+
+import numpy as np
+import pytest
+
+from ornitail.balance.derivatives import weighted_tare_covariance
+from ornitail.balance.tare_drift import (
+    DRIFT_MODEL_CONSTANT,
+    DRIFT_MODEL_LINEAR,
+    RecordedTare,
+    tare_correction,
+)
+
+BEFORE = RecordedTare("run#0", "run", 1_000.0, np.full(6, 0.010), np.full(6, 3e-5))
+AFTER = RecordedTare("run#9", "run", 11_000.0, np.full(6, 0.030), np.full(6, 4e-5))
+EARLIER = RecordedTare("run#1", "run", 500.0, AFTER.volts, AFTER.volts_standard_error)
+
+
+def test_a_point_between_two_tares_gets_the_zero_interpolated_in_time():
+    correction = tare_correction(BEFORE, AFTER, 3_500.0, "run")  # a quarter of the way
+    assert correction.after_weight == pytest.approx(0.25)
+    np.testing.assert_allclose(correction.volts, 0.75 * 0.010 + 0.25 * 0.030)
+    np.testing.assert_allclose(correction.volts_standard_error, np.hypot(0.75 * 3e-5, 0.25 * 4e-5))
+    assert correction.drift_model == DRIFT_MODEL_LINEAR
+
+
+@pytest.mark.parametrize(
+    ("after", "run_id"),
+    [(None, "run"), (AFTER, "another run"), (EARLIER, "run")],
+    ids=["no tare after", "point in another run", "tare after not later"],
+)
+def test_without_a_later_tare_in_the_same_run_the_last_tare_is_used_as_it_is(after, run_id):
+    correction = tare_correction(BEFORE, after, 3_500.0, run_id)
+    assert correction.after is None and correction.after_weight == 0.0
+    np.testing.assert_allclose(correction.volts, BEFORE.volts)
+    assert correction.drift_model == DRIFT_MODEL_CONSTANT
+
+
+def test_weights_stay_between_the_tares():
+    assert tare_correction(BEFORE, AFTER, 20_000.0, "run").after_weight == 1.0
+    assert tare_correction(BEFORE, AFTER, 0.0, "run").after_weight == 0.0
+
+
+def test_shared_tares_covariance_equals_the_sampled_covariance_of_interpolated_zeros():
+    """Three points between tares A and B (weights 0.2, 0.5, 0.9) and one with tare C alone: the formula against
+    the covariance of 200 000 draws of independent tare errors (relative error of a sampled covariance
+    ~ sqrt(2 / n) = 0.3 %, so 2 % of the largest entry is ~7 standard errors)."""
+    tare_se = {"A": 2.0, "B": 3.0, "C": 1.5, "": 0.0}
+    before_ids = np.array(["A", "A", "A", "C"])
+    after_ids = np.array(["B", "B", "B", ""])
+    weights = np.array([0.2, 0.5, 0.9, 0.0])
+    point_se = np.array([0.5, 0.6, 0.7, 0.8])
+    before_se = np.array([tare_se[name] for name in before_ids])
+    after_se = np.array([tare_se[name] for name in after_ids])
+    formula = weighted_tare_covariance(
+        point_se, [(before_ids, (1 - weights) * before_se), (after_ids, weights * after_se)]
+    )
+    generator = np.random.default_rng(5)
+    draws = 200_000
+    tare_errors = {name: generator.normal(0.0, se, draws) for name, se in tare_se.items()}
+    zeros = np.array(
+        [
+            (1 - w) * tare_errors[b] + w * tare_errors[a] + generator.normal(0.0, se, draws)
+            for b, a, w, se in zip(before_ids, after_ids, weights, point_se, strict=True)
+        ]
+    )
+    sampled = np.cov(zeros)
+    assert np.abs(formula - sampled).max() <= 0.02 * np.abs(formula).max()
+    assert formula[0, 3] == 0.0  # no tare in common
