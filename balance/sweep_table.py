@@ -36,8 +36,10 @@ from ornitail.balance.point_loads import (
 )
 from ornitail.balance.tare_drift import (
     RecordedTare,
+    RunningClock,
     TareCorrection,
     middle_sample_index,
+    running_clock_of,
     tare_correction,
 )
 from ornitail.calibration.ati_calibration import AtiCalibration
@@ -268,7 +270,7 @@ def _tare_record(tare: RecordedTare) -> SetPointRecord:
     return tare.record
 
 
-def _recorded_tare(point: _RecordedPoint) -> RecordedTare:
+def _recorded_tare(point: _RecordedPoint, clock: RunningClock) -> RecordedTare:
     frame = point.recording.set_point_frame(int(point.row["set_point_index"]))
     volts, volts_standard_error = tare_volts_and_error(
         frame[list(GAUGE_CHANNELS)].to_numpy(dtype=float)
@@ -276,7 +278,7 @@ def _recorded_tare(point: _RecordedPoint) -> RecordedTare:
     return RecordedTare(
         tare_id=f"{point.recording.run_id}#{int(point.row['plan_point_index'])}",
         run_id=point.recording.run_id,
-        middle_sample_index=middle_sample_index(point.record),
+        running_time=clock.at(middle_sample_index(point.record)),
         volts=volts,
         volts_standard_error=volts_standard_error,
         record=point.record,
@@ -318,14 +320,19 @@ def measured_set_points(
     points = _recorded_points(Path(directory) for directory in run_directories)
     tares: dict[tuple[bool, float], RecordedTare] = {}
     calibrations: dict[str, AtiCalibration] = {}
+    clocks: dict[str, RunningClock] = {}
     measured = []
     for position, point in enumerate(points):
         row = point.row
         key = _tare_key(point)
         if point.record.is_flagged and not keep_saturated:
             _refuse_flagged(point)
+        run_id = point.recording.run_id
+        if run_id not in clocks:
+            clocks[run_id] = running_clock_of(point.recording.set_points)
+        clock = clocks[run_id]
         if row["kind"] == "tare":
-            tares[key] = _recorded_tare(point)
+            tares[key] = _recorded_tare(point, clock)
             continue
         before = tares.get(key)
         if before is None:
@@ -337,11 +344,10 @@ def measured_set_points(
         after = _next_tare_in_run(points, position, key)
         correction = tare_correction(
             before,
-            None if after is None else _recorded_tare(after),
-            middle_sample_index(point.record),
-            point.recording.run_id,
+            None if after is None else _recorded_tare(after, clock),
+            clock.at(middle_sample_index(point.record)),
+            run_id,
         )
-        run_id = point.recording.run_id
         if run_id not in calibrations:
             calibrations[run_id] = balance_calibration_of(point.recording)
         flags = {**_flag_counts(point.record), **_flag_counts(_tare_record(before), "tare_")}

@@ -2,13 +2,17 @@
 
 A strain-gauge balance drifts (warm-up, creep): a wind-off tare taken a minute before a point no longer gives the
 gauges' zero at the point. When the plan brackets a block of points with wind-off tares at the same pitch and tail
-state (``[protocol] bracketing_tares``, docs/sweep-plan.md), the zero at a point is interpolated linearly in time
-between the tare before and the tare after it:
+state (``[protocol] bracketing_tares``, docs/sweep-plan.md), the zero at a point is interpolated linearly between
+the tare before and the tare after it:
 
     V0(t) = (1 - lambda) V_before + lambda V_after,   lambda = (t - t_before) / (t_after - t_before)
 
-with t the middle of each record in the run's sample counter (one continuous stream per run, so the counter is
-the run's clock). The two tares' errors are independent, so the variance of V0 is
+in the rig's running time t: the time the motor ran, counted on the run's sample counter (one continuous stream
+per run) from the end of each tare record to the end of the last measurement record before the next tare (the
+motor is on from the first measurement's settling to the wind-off before a tare, off from then through the tare's
+record). The balance warms and creeps while the rig runs, not while it stands for a tare: counted in wall time, the
+wind-off and the tare's record (a tenth of a block, and more of a short one) would take a share of the drift that
+happened while the motor ran. The two tares' errors are independent, so the variance of V0 is
 ``(1 - lambda)^2 se_before^2 + lambda^2 se_after^2``; points that share a tare share its error in proportion to
 their weights on it (``balance.derivatives.weighted_tare_covariance``). Without a tare after the point in the
 same run, the last tare before it is used as it is ("constant since the last tare": its drift since then is not
@@ -23,17 +27,47 @@ import numpy as np
 
 from ornitail.acquisition.recording_layout import SetPointRecord
 
-DRIFT_MODEL_LINEAR = "linear in time between bracketing tares"
+DRIFT_MODEL_LINEAR = "linear in running time (motor on) between bracketing tares"
 DRIFT_MODEL_CONSTANT = "constant since the last tare (no tare after the point in its run)"
+
+
+class RunningClock:
+    """The rig's running time (motor on) of one run, in samples of its counter, from its records in order.
+
+    ``records`` are ``(is_tare, first_sample_index, last_sample_index)`` of every set point of the run. The motor
+    runs from the end of a tare record (or the run's start) to the end of the last measurement record before the
+    next tare (or the run's last record).
+    """
+
+    def __init__(self, records: list[tuple[bool, float, float]]) -> None:
+        ordered = sorted(records, key=lambda record: record[1])
+        intervals: list[tuple[float, float]] = []
+        start = 0.0
+        last_measurement_end: float | None = None
+        for is_tare, _first, last in ordered:
+            if is_tare:
+                if last_measurement_end is not None:
+                    intervals.append((start, last_measurement_end))
+                start, last_measurement_end = float(last), None
+            else:
+                last_measurement_end = float(last)
+        if last_measurement_end is not None:
+            intervals.append((start, last_measurement_end))
+        self.intervals = intervals
+
+    def at(self, sample_index: float) -> float:
+        """Running time up to ``sample_index``, samples."""
+        return float(sum(max(0.0, min(sample_index, end) - begin) for begin, end in self.intervals))
 
 
 @dataclass(frozen=True)
 class RecordedTare:
-    """One wind-off tare record: its mean gauge voltages and their standard error (V, shape (6,))."""
+    """One wind-off tare record: its mean gauge voltages and their standard error (V, shape (6,)), and where it
+    sits on its run's running clock (samples)."""
 
     tare_id: str
     run_id: str
-    middle_sample_index: float
+    running_time: float
     volts: np.ndarray
     volts_standard_error: np.ndarray
     record: SetPointRecord | None = None
@@ -42,6 +76,16 @@ class RecordedTare:
 def middle_sample_index(record: SetPointRecord) -> float:
     """The middle of a record on its run's sample counter."""
     return 0.5 * (record.first_sample_index + record.last_sample_index)
+
+
+def running_clock_of(records: list[SetPointRecord]) -> RunningClock:
+    """The running clock of a run from its set-point records."""
+    return RunningClock(
+        [
+            (record.kind == "tare", record.first_sample_index, record.last_sample_index)
+            for record in records
+        ]
+    )
 
 
 @dataclass(frozen=True)
@@ -76,14 +120,14 @@ class TareCorrection:
 
 
 def tare_correction(
-    before: RecordedTare, after: RecordedTare | None, middle_sample: float, run_id: str
+    before: RecordedTare, after: RecordedTare | None, running_time: float, run_id: str
 ) -> TareCorrection:
-    """Bracket a record whose middle is ``middle_sample`` on run ``run_id``'s counter between ``before`` and
-    ``after`` when both are in its run; else the tare before alone."""
+    """Bracket a record at ``running_time`` on run ``run_id``'s running clock between ``before`` and ``after``
+    when both are in its run and the rig ran between them; else the tare before alone."""
     if after is None or before.run_id != run_id or after.run_id != run_id:
         return TareCorrection(before)
-    span = after.middle_sample_index - before.middle_sample_index
+    span = after.running_time - before.running_time
     if span <= 0:
         return TareCorrection(before)
-    weight = (middle_sample - before.middle_sample_index) / span
+    weight = (running_time - before.running_time) / span
     return TareCorrection(before, after, float(np.clip(weight, 0.0, 1.0)))

@@ -37,7 +37,7 @@ from ornitail.balance.point_loads import (
     propagated_standard_error,
     tare_volts_and_error,
 )
-from ornitail.balance.tare_drift import RecordedTare, tare_correction
+from ornitail.balance.tare_drift import RecordedTare, RunningClock, tare_correction
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.calibration.tool_transform import ToolTransform
 from ornitail.sim.configuration import study_configuration
@@ -86,11 +86,20 @@ class SimulatedSweep:
                 )
             )
             stream_samples += settle_samples + record_samples
+        clock = RunningClock(
+            [
+                (point.kind == "tare", middle - record_samples / 2, middle + record_samples / 2 - 1)
+                for point, _, middle in records
+            ]
+        )
         tares = [
             (
                 point,
                 RecordedTare(
-                    f"tare#{point.index}", "sweep", middle, *tare_volts_and_error(block[:, :6])
+                    f"tare#{point.index}",
+                    "sweep",
+                    clock.at(middle),
+                    *tare_volts_and_error(block[:, :6]),
                 ),
             )
             for point, block, middle in records
@@ -110,7 +119,7 @@ class SimulatedSweep:
             after = next(
                 (tare for tare_point, tare in same if tare_point.index > point.index), None
             )
-            correction = tare_correction(before, after, middle, "sweep")
+            correction = tare_correction(before, after, clock.at(middle), "sweep")
             loads = cycle_averaged_loads(
                 block[:, :6],
                 block[:, 8],
@@ -246,7 +255,7 @@ def main(argv: list[str] | None = None) -> int:
     plan = load_plan(SHIPPED_PLAN_PATH)
     if options.one_tare:
         document = tomllib.loads(SHIPPED_PLAN_PATH.read_text())
-        document["protocol"]["bracketing_tares"] = False
+        document["protocol"].update(bracketing_tares=False, points_per_block=0)
         plan = plan_from_document(document, str(SHIPPED_PLAN_PATH))
     sweep = simulated_sweep(plan=plan, effects=EffectSet())
     rows = [sweep_z_scores(sweep, seed, options.settle_s) for seed in range(options.seeds)]

@@ -26,14 +26,18 @@ def test_demo_records_the_study_protocol_and_prints_cycle_averaged_loads(tmp_pat
     assert completed.returncode == 0, completed.stderr
     result = json.loads(completed.stdout)
     assert result["sweep"]["status"] == "completed"
-    assert result["sweep"]["completed_points"] == 30
+    assert result["sweep"]["completed_points"] == 33
     steady = result["steady_state"]
     # Three 2 s records of ~27 flaps at 13.5 Hz each; a partial cycle is lost at each end of a record.
     assert steady["tailed"]["cycles"] >= 72 and steady["tailless"]["cycles"] >= 72
     assert abs(steady["tailed"]["f_hall_hz"] - 13.5) < 0.1
     table = pd.read_csv(result["table_csv"])
-    assert len(table) == 18  # 30 set points minus 12 tares (before and after each pitch's block)
-    assert (table["drift_model"] == "linear in time between bracketing tares").all()
+    assert (
+        len(table) == 18
+    )  # 33 set points minus 15 tares (before each pitch's points, after each block)
+    assert (
+        table["drift_model"] == "linear in running time (motor on) between bracketing tares"
+    ).all()
     # The simulated vehicle's own truth at the steady state (tunnel environment, the rig's default effects).
     configuration = study_configuration("S3", 98.0)
     truth = {

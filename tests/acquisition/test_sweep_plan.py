@@ -33,9 +33,10 @@ def test_study_plan_expands_to_the_study_protocol():
     tares = [p for p in points if p.kind == "tare"]
     # 3 tailed + 3 tailless steady states, 4 offsets for each of 3 sweeps with the tail on.
     assert len(measurements) == 3 + 3 + 3 * 4
-    # Two tares per pitch per tail state (before and after its block): 5 pitches tailed, the steady-state pitch
-    # tailless.
-    assert len(tares) == 2 * (5 + 1)
+    # A tare before each pitch's points and one after every block of at most 3: the steady-state pitch tailed has
+    # 11 points (3 steady states, 4 velocity and 4 frequency offsets), so 4 blocks and 5 tares; the other 4 pitches
+    # one point and 2 tares each; tailless, the 3 steady states between 2 tares.
+    assert len(tares) == 5 + 4 * 2 + 2
     assert set_point_count(plan) == len(points)
     assert [p.index for p in points] == list(range(len(points)))
     pitches_deg = sorted({round(math.degrees(p.pitch_rad), 9) for p in measurements})
@@ -126,7 +127,7 @@ def test_offsets_as_list_and_no_tailless_points():
     document = study_document()
     document["sweeps"] = {"v_m_s": [-0.2, 0.1]}
     document["protocol"].update(
-        tailless_points="none", wind_off_tares=False, bracketing_tares=False
+        tailless_points="none", wind_off_tares=False, bracketing_tares=False, points_per_block=0
     )
     plan = plan_from_document(document)
     assert [p.sweep for p in plan.set_points] == ["steady_state"] * 3 + ["velocity"] * 2
@@ -136,9 +137,26 @@ def test_offsets_as_list_and_no_tailless_points():
 def test_bracketing_tares_need_wind_off_tares_and_are_off_unless_asked():
     document = study_document()
     document["protocol"].pop("bracketing_tares")
+    document["protocol"].pop("points_per_block")
     plain = plan_from_document(document)
     assert not plain.bracketing_tares
     assert sum(p.kind == "tare" for p in plain.set_points) == 5 + 1 == set_point_count(plain) - 18
+    document["protocol"].update(points_per_block=3)
+    with pytest.raises(UserInputError, match=r"points_per_block.*needs bracketing_tares = true"):
+        plan_from_document(document, "p.toml")
     document["protocol"].update(bracketing_tares=True, wind_off_tares=False)
     with pytest.raises(UserInputError, match=r"bracketing_tares.*needs wind_off_tares = true"):
         plan_from_document(document, "p.toml")
+
+
+@pytest.mark.parametrize("points_per_block", [0, 1, 2, 3, 5, 11, 12])
+@pytest.mark.parametrize("tailless_points", ["none", "steady_state", "all"])
+def test_blocks_are_bracketed_and_counted_without_expanding(points_per_block, tailless_points):
+    document = study_document()
+    document["protocol"].update(points_per_block=points_per_block, tailless_points=tailless_points)
+    plan = plan_from_document(document)
+    assert set_point_count(plan) == len(plan.set_points)
+    kinds = [p.kind for p in plan.set_points]
+    runs_of_measurements = "".join("t" if kind == "tare" else "m" for kind in kinds).split("t")
+    assert all(len(run) <= (points_per_block or 11) for run in runs_of_measurements)
+    assert kinds[-1] == "tare"  # every block ends with its tare

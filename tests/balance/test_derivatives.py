@@ -30,7 +30,8 @@ def shipped_plan_with(record_s, bracketing_tares=True):
         (files("ornitail.acquisition") / "data" / "study_tunnel_plan.toml").read_text()
     )
     document["protocol"]["record_s"] = record_s
-    document["protocol"]["bracketing_tares"] = bracketing_tares
+    if not bracketing_tares:
+        document["protocol"].update(bracketing_tares=False, points_per_block=0)
     return plan_from_document(document)
 
 

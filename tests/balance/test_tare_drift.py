@@ -8,6 +8,7 @@ from ornitail.balance.tare_drift import (
     DRIFT_MODEL_CONSTANT,
     DRIFT_MODEL_LINEAR,
     RecordedTare,
+    RunningClock,
     tare_correction,
 )
 
@@ -67,3 +68,28 @@ def test_shared_tares_covariance_equals_the_sampled_covariance_of_interpolated_z
     sampled = np.cov(zeros)
     assert np.abs(formula - sampled).max() <= 0.02 * np.abs(formula).max()
     assert formula[0, 3] == 0.0  # no tare in common
+
+
+def test_the_running_clock_counts_only_from_a_tare_to_the_last_point_before_the_next():
+    """Records (is tare, first, last sample): tare 0-99, points 300-399 and 600-699, tare 900-999, point 1300-1399,
+    tare 1500-1599. The motor runs 99..699 (600 samples) and 999..1399 (400); it stands from the end of the last
+    point before a tare through the tare's record."""
+    clock = RunningClock(
+        [
+            (True, 0, 99),
+            (False, 300, 399),
+            (False, 600, 699),
+            (True, 900, 999),
+            (False, 1300, 1399),
+            (True, 1500, 1599),
+        ]
+    )
+    assert clock.intervals == [(99.0, 699.0), (999.0, 1399.0)]
+    assert clock.at(49.5) == 0.0  # the first tare's middle
+    assert clock.at(349.5) == pytest.approx(250.5)
+    assert clock.at(949.5) == clock.at(800.0) == 600.0  # standing: wind-off and the tare's record
+    assert clock.at(1549.5) == 1000.0
+    # A point halfway through the running between two tares gets weight one half, wherever the standing time is.
+    first = RecordedTare("r#0", "r", clock.at(49.5), np.zeros(6), np.ones(6))
+    second = RecordedTare("r#3", "r", clock.at(949.5), np.ones(6), np.ones(6))
+    assert tare_correction(first, second, clock.at(399.0), "r").after_weight == pytest.approx(0.5)
