@@ -131,3 +131,16 @@ def tare_correction(
         return TareCorrection(before)
     weight = (running_time - before.running_time) / span
     return TareCorrection(before, after, float(np.clip(weight, 0.0, 1.0)))
+
+
+def drift_statement(drift_models: list[str]) -> str:
+    """One line saying how the balance's drift was treated for a configuration's points (``drift_model`` column)."""
+    total = len(drift_models)
+    linear = sum(model == DRIFT_MODEL_LINEAR for model in drift_models)
+    if linear == total:
+        return f"Balance drift: the zero of all {total} points interpolated {DRIFT_MODEL_LINEAR}."
+    return (
+        f"Balance drift NOT corrected for {total - linear} of {total} points: no tare after them in their run, so "
+        "the last tare is subtracted as it is and their drift since it is in their loads (plan "
+        "bracketing_tares = true measures it)."
+    )

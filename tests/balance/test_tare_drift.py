@@ -9,6 +9,7 @@ from ornitail.balance.tare_drift import (
     DRIFT_MODEL_LINEAR,
     RecordedTare,
     RunningClock,
+    drift_statement,
     tare_correction,
 )
 
@@ -93,3 +94,11 @@ def test_the_running_clock_counts_only_from_a_tare_to_the_last_point_before_the_
     first = RecordedTare("r#0", "r", clock.at(49.5), np.zeros(6), np.ones(6))
     second = RecordedTare("r#3", "r", clock.at(949.5), np.ones(6), np.ones(6))
     assert tare_correction(first, second, clock.at(399.0), "r").after_weight == pytest.approx(0.5)
+
+
+def test_the_drift_statement_says_whether_every_point_was_corrected():
+    assert drift_statement([DRIFT_MODEL_LINEAR] * 3) == (
+        f"Balance drift: the zero of all 3 points interpolated {DRIFT_MODEL_LINEAR}."
+    )
+    partly = drift_statement([DRIFT_MODEL_LINEAR, DRIFT_MODEL_CONSTANT, DRIFT_MODEL_CONSTANT])
+    assert partly.startswith("Balance drift NOT corrected for 2 of 3 points")
