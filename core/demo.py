@@ -45,6 +45,8 @@ _PRINTED_LOADS = ("x_n", "z_n", "m_n_m")
 _UNITS = {"x_n": "N", "z_n": "N", "m_n_m": "N m"}
 AGREEMENT_SIGMAS = 2.0
 """An estimate agrees with the simulator's truth when it lies within this many of its own sigmas of it."""
+CHANCE_BEYOND_TWO_SIGMA = 0.0455
+"""Probability that a normal error lies beyond 2 of its sigmas."""
 
 
 def _compared(estimate: float, sigma: float, truth: float, unit: str) -> dict[str, Any]:
@@ -120,9 +122,11 @@ def _truth_lines(comparison: dict[str, dict[str, Any]]) -> list[str]:
             f"{entry['error_in_sigmas']:>+13.1f}  {verdict}"
         )
     disagreeing = [name for name, entry in comparison.items() if not entry["agrees"]]
+    expected = len(comparison) * CHANCE_BEYOND_TWO_SIGMA
     lines.append(
-        f"  {len(disagreeing)} of {len(comparison)} disagree with the truth beyond {AGREEMENT_SIGMAS:g} sigma"
-        + (f" ({', '.join(disagreeing)}): their sigmas understate the error" if disagreeing else "")
+        f"  {len(disagreeing)} of {len(comparison)} lie beyond {AGREEMENT_SIGMAS:g} of their sigmas from the truth"
+        + (f" ({', '.join(disagreeing)})" if disagreeing else "")
+        + f"; about {expected:.1f} would by chance if every interval were honest"
     )
     return lines
 
