@@ -40,6 +40,7 @@ import numpy as np
 import pandas as pd
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.units import quotient_unit
 
 LOADS = (("X", "x_n", "N"), ("Z", "z_n", "N"), ("M", "m_n_m", "N m"))
 """Load symbol, its column in the cycle-averaged table, its unit."""
@@ -64,10 +65,7 @@ _SWEEP_COORDINATES = {"velocity": "dV_along", "theta": "dV_across", "frequency":
 def derivative_unit(load: str, variable: str) -> str:
     """Unit of ``d load / d variable``: N/(m/s), N m/(m/s), N/Hz or N m/Hz."""
     load_unit = dict((symbol, unit) for symbol, _, unit in LOADS)[load]
-    variable_unit = dict(VARIABLES)[variable]
-    return (
-        f"{load_unit}/({variable_unit})" if "/" in variable_unit else f"{load_unit}/{variable_unit}"
-    )
+    return quotient_unit(load_unit, dict(VARIABLES)[variable])
 
 
 def body_velocities(theta_rad: np.ndarray | float, v_m_s: np.ndarray | float) -> tuple:

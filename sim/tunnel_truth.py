@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from ornitail.calibration.tool_transform import ToolTransform
+from ornitail.core.units import quotient_unit
 from ornitail.sim.configuration import VehicleConfiguration
 from ornitail.sim.effects import EffectSet
 from ornitail.sim.model import PreparedVehicle
@@ -97,10 +98,7 @@ def _pairs() -> list[tuple[str, str]]:
 
 def _derivative_unit(load: str, variable: str) -> str:
     load_unit = {symbol: unit for symbol, _, unit in LOAD_KEYS}[load]
-    variable_unit = {symbol: unit for symbol, unit, _ in VARIABLE_STEPS}[variable]
-    return (
-        f"{load_unit}/({variable_unit})" if "/" in variable_unit else f"{load_unit}/{variable_unit}"
-    )
+    return quotient_unit(load_unit, {symbol: unit for symbol, unit, _ in VARIABLE_STEPS}[variable])
 
 
 def _reference_point_loads(
