@@ -33,6 +33,8 @@ MAX_REPEATS = 1000
 """Most repeats of a set point (steady state or sweep point)."""
 MAX_SWEEP_STEPS = 1000
 """Most offsets on one side of a ``{span, steps}`` sweep, and most listed offsets / 2."""
+MAX_TAIL_CHANGE_S = 3600.0
+"""Longest time a tail change may be planned to take, s."""
 MAX_SET_POINTS = 10_000
 """Most set points (tares included) in a plan."""
 MAX_DURATION_S = 24 * 3600.0
@@ -62,7 +64,8 @@ class SetPoint:
     kind : {"tare", "measurement"}
         A wind-off tare (fan and motor off) or a measurement.
     sweep : str
-        ``"tare"``, ``"steady_state"``, ``"theta"``, ``"velocity"`` or ``"frequency"``.
+        ``"tare"``, ``"steady_state"``, ``"theta"``, ``"velocity"``, ``"frequency"`` or ``"reference"`` (the
+        steady state again at the end of a sweep, ``[protocol] return_to_reference``).
     tail_attached : bool
         Whether the tail is on the vehicle.
     pitch_rad : float
@@ -143,6 +146,9 @@ class SweepPlan:
     source: str = "<plan>"
     bracketing_tares: bool = False
     points_per_block: int = 0
+    interleave_tail_states: bool = False
+    return_to_reference: bool = False
+    tail_change_s: float = 0.0
     set_points: tuple[SetPoint, ...] = field(default=(), compare=False)
 
     def configuration_record(self) -> dict[str, Any]:
@@ -222,6 +228,9 @@ def plan_from_document(document: dict[str, Any], source: str = "<plan>") -> Swee
             "wind_off_tares",
             "bracketing_tares",
             "points_per_block",
+            "interleave_tail_states",
+            "return_to_reference",
+            "tail_change_s",
             "record_s",
             "sample_rate_hz",
         },
@@ -292,6 +301,14 @@ def plan_from_document(document: dict[str, Any], source: str = "<plan>") -> Swee
         source=source,
         bracketing_tares=protocol.boolean("bracketing_tares", False),
         points_per_block=protocol.integer("points_per_block", 0, minimum=0, maximum=MAX_REPEATS),
+        interleave_tail_states=protocol.boolean("interleave_tail_states", False),
+        return_to_reference=protocol.boolean("return_to_reference", False),
+        tail_change_s=_at_most(
+            protocol,
+            "tail_change_s",
+            protocol.number("tail_change_s", 0.0, minimum=0.0),
+            MAX_TAIL_CHANGE_S,
+        ),
     )
     if plan.bracketing_tares and not plan.wind_off_tares:
         raise UserInputError(
@@ -340,25 +357,55 @@ def _at_most(table: TomlTable, key: str, value: float, maximum: float) -> float:
     return value
 
 
+@dataclass(frozen=True)
+class _Segment:
+    """Measurements of one tail state recorded without a tail change between them (one run of a sweep)."""
+
+    tail_attached: bool
+    steady_state_repeats: tuple[int, ...]
+    with_sweeps: bool
+
+
+def _segments(plan: SweepPlan) -> list[_Segment]:
+    """The plan's segments in time order: each tail state once, or, with ``interleave_tail_states``, the
+    steady-state repeats alternating tailed, tailless, tailed, ... with the sweeps in the first of each state."""
+    states = [True] if plan.tailless_points == "none" else [True, False]
+    repeats = range(plan.steady_state_repeats)
+
+    def sweeps_for(tail_attached: bool) -> bool:
+        return tail_attached or plan.tailless_points == "all"
+
+    if not plan.interleave_tail_states or len(states) == 1:
+        return [_Segment(state, tuple(repeats), sweeps_for(state)) for state in states]
+    return [
+        _Segment(state, (repeat,), sweeps_for(state) and repeat == 0)
+        for repeat in repeats
+        for state in states
+    ]
+
+
+def _group_sizes(plan: SweepPlan, segment: _Segment) -> list[int]:
+    """How many measurements each pitch group of ``segment`` holds, in time order (see :func:`_pitch_groups`)."""
+    steady = len(segment.steady_state_repeats)
+    if not segment.with_sweeps:
+        return [steady]
+    at_steady_pitch = steady + sum(
+        plan.sweep_repeats * len(plan.sweep_offsets.get(variable, ()))
+        + int(plan.return_to_reference and bool(plan.sweep_offsets.get(variable)))
+        for variable in ("velocity", "frequency")
+    )
+    pitch_offsets = {offset for offset in plan.sweep_offsets.get("theta", ()) if offset != 0}
+    returning = int(plan.return_to_reference and bool(pitch_offsets))
+    return [at_steady_pitch] + [plan.sweep_repeats] * len(pitch_offsets) + [1] * returning
+
+
 def set_point_count(plan: SweepPlan) -> int:
     """How many set points (tares included) ``plan`` expands to, counted without expanding it."""
-    sweep_points = sum(len(offsets) for offsets in plan.sweep_offsets.values())
-    total = 0
-    for tail_attached in [True] if plan.tailless_points == "none" else [True, False]:
-        with_sweeps = tail_attached or plan.tailless_points == "all"
-        total += plan.steady_state_repeats
-        if with_sweeps:
-            total += sweep_points * plan.sweep_repeats
-        if plan.wind_off_tares:
-            pitch_offsets = plan.sweep_offsets.get("theta", ()) if with_sweeps else ()
-            steady_pitch_points = plan.steady_state_repeats + plan.sweep_repeats * sum(
-                len(plan.sweep_offsets.get(variable, ())) for variable in ("velocity", "frequency")
-            ) * int(with_sweeps)
-            points_at_pitches = [steady_pitch_points] + [plan.sweep_repeats] * len(
-                {offset for offset in pitch_offsets if offset != 0}
-            )
-            total += sum(_tares_at_a_pitch(plan, count) for count in points_at_pitches)
-    return total
+    return sum(
+        size + _tares_at_a_pitch(plan, size)
+        for segment in _segments(plan)
+        for size in _group_sizes(plan, segment)
+    )
 
 
 def _tares_at_a_pitch(plan: SweepPlan, point_count: int) -> int:
@@ -373,9 +420,11 @@ def _tares_at_a_pitch(plan: SweepPlan, point_count: int) -> int:
 
 
 def estimated_duration_s(plan: SweepPlan, point_count: int | None = None) -> float:
-    """A lower bound of a sweep's duration, s: set points x (record_s + stable_for_s)."""
+    """A lower bound of a sweep's duration, s: set points x (record_s + stable_for_s), plus ``tail_change_s``
+    for every tail change between segments."""
     count = set_point_count(plan) if point_count is None else point_count
-    return count * (plan.record_s + plan.settle.stable_for_s)
+    tail_changes = len(_segments(plan)) - 1
+    return count * (plan.record_s + plan.settle.stable_for_s) + tail_changes * plan.tail_change_s
 
 
 def _check_size(plan: SweepPlan) -> None:
@@ -392,72 +441,81 @@ def _check_size(plan: SweepPlan) -> None:
         raise UserInputError(
             plan.source,
             f"the plan takes at least {duration_s / 3600:.1f} h ({count} set points x "
-            f"(record_s + stable_for_s)), more than the {MAX_DURATION_S / 3600:g} h allowed; "
+            f"(record_s + stable_for_s), and tail_change_s per tail change), more than the "
+            f"{MAX_DURATION_S / 3600:g} h allowed; "
             "split it into several plans",
         )
 
 
-def _measurements_for_tail_state(plan: SweepPlan, tail_attached: bool) -> list[dict[str, Any]]:
-    points = [
-        {
-            "sweep": "steady_state",
-            "repeat": repeat,
-            "pitch_rad": plan.theta0_rad,
-            "tunnel_velocity_m_s": plan.velocity0_m_s,
-            "flapping_frequency_hz": plan.frequency0_hz,
-        }
-        for repeat in range(plan.steady_state_repeats)
-    ]
-    if not tail_attached and plan.tailless_points == "steady_state":
-        return points
+def _point(plan: SweepPlan, sweep: str, repeat: int, **offsets: float) -> dict[str, Any]:
+    """A measurement at the steady state moved by ``offsets`` (SI, by set-point field)."""
+    point = {
+        "sweep": sweep,
+        "repeat": repeat,
+        "pitch_rad": plan.theta0_rad,
+        "tunnel_velocity_m_s": plan.velocity0_m_s,
+        "flapping_frequency_hz": plan.frequency0_hz,
+    }
+    for key, offset in offsets.items():
+        point[key] += offset
+    return point
+
+
+_SWEEP_FIELDS = {
+    "theta": "pitch_rad",
+    "velocity": "tunnel_velocity_m_s",
+    "frequency": "flapping_frequency_hz",
+}
+
+
+def _pitch_groups(plan: SweepPlan, segment: _Segment) -> list[list[dict[str, Any]]]:
+    """The measurements of ``segment`` grouped by pitch in time order: the pitches in increasing order (the
+    steady-state pitch holds the steady states, then the velocity and frequency sweeps, each followed by a
+    return-to-reference point with ``return_to_reference``), then, with that option and a pitch sweep, one more
+    reference point at the steady state after the pitch sweep's last pitch."""
+    steady = [_point(plan, "steady_state", repeat) for repeat in segment.steady_state_repeats]
+    if not segment.with_sweeps:
+        return [steady]
+    by_pitch: dict[float, list[dict[str, Any]]] = {plan.theta0_rad: steady}
     for variable, offsets in plan.sweep_offsets.items():
+        field_name = _SWEEP_FIELDS[variable]
         for offset in sorted(offsets):
             for repeat in range(plan.sweep_repeats):
-                point = {
-                    "sweep": variable,
-                    "repeat": repeat,
-                    "pitch_rad": plan.theta0_rad,
-                    "tunnel_velocity_m_s": plan.velocity0_m_s,
-                    "flapping_frequency_hz": plan.frequency0_hz,
-                }
-                key = {
-                    "theta": "pitch_rad",
-                    "velocity": "tunnel_velocity_m_s",
-                    "frequency": "flapping_frequency_hz",
-                }[variable]
-                point[key] += offset
-                points.append(point)
-    return points
+                point = _point(plan, variable, repeat, **{field_name: offset})
+                by_pitch.setdefault(point["pitch_rad"], []).append(point)
+        if plan.return_to_reference and offsets and variable != "theta":
+            by_pitch[plan.theta0_rad].append(_point(plan, "reference", 0))
+    groups = [by_pitch[pitch] for pitch in sorted(by_pitch)]
+    if plan.return_to_reference and plan.sweep_offsets.get("theta"):
+        groups.append([_point(plan, "reference", 0)])
+    return groups
 
 
 def _with_set_points(plan: SweepPlan) -> SweepPlan:
-    """Expand the plan: for each tail state, each pitch in increasing order gets its tare, then its points (with
-    ``bracketing_tares``, a tare at the same pitch after each block of at most ``points_per_block`` of them, so the
-    balance's drift across every block is measured)."""
-    tail_states = [True] if plan.tailless_points == "none" else [True, False]
+    """Expand the plan: segment by segment (:func:`_segments`), each pitch group (:func:`_pitch_groups`) gets its
+    tare, then its points (with ``bracketing_tares``, a tare at the same pitch after each block of at most
+    ``points_per_block`` of them, so the balance's drift across every block is measured)."""
     ordered: list[dict[str, Any]] = []
-    for tail_attached in tail_states:
-        measurements = _measurements_for_tail_state(plan, tail_attached)
-        for pitch_rad in sorted({point["pitch_rad"] for point in measurements}):
+    for segment in _segments(plan):
+        for group in _pitch_groups(plan, segment):
             tare = {
                 "kind": "tare",
                 "sweep": "tare",
                 "repeat": 0,
-                "pitch_rad": pitch_rad,
+                "pitch_rad": group[0]["pitch_rad"],
                 "tunnel_velocity_m_s": 0.0,
                 "flapping_frequency_hz": 0.0,
-                "tail_attached": tail_attached,
+                "tail_attached": segment.tail_attached,
             }
-            at_pitch = [
-                {**point, "kind": "measurement", "tail_attached": tail_attached}
-                for point in measurements
-                if point["pitch_rad"] == pitch_rad
+            points = [
+                {**point, "kind": "measurement", "tail_attached": segment.tail_attached}
+                for point in group
             ]
             if plan.wind_off_tares:
                 ordered.append(tare)
-            size = plan.points_per_block or len(at_pitch)
-            for block, start in enumerate(range(0, len(at_pitch), size), start=1):
-                ordered.extend(at_pitch[start : start + size])
+            size = plan.points_per_block or len(points)
+            for block, start in enumerate(range(0, len(points), size), start=1):
+                ordered.extend(points[start : start + size])
                 if plan.bracketing_tares:
                     ordered.append({**tare, "repeat": block})
     set_points = tuple(

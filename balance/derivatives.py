@@ -20,7 +20,8 @@ remove the chord bias. ``max_sweep_order=1`` gives the plain straight-line fit.
 Weights: the points' covariance is the cycle scatter of each point (``se**2`` on the diagonal) plus the noise of
 each wind-off tare, shared by every point corrected with that tare (``tare_se**2`` between them; with bracketing
 tares a point's zero is ``(1 - lambda)`` times the tare before plus ``lambda`` times the tare after, and two points
-share each tare's error in proportion to their weights on it, see :func:`weighted_tare_covariance`); the fit is
+share each tare's error in proportion to their weights on it; and the drift's bend when the tares show one, see
+:mod:`ornitail.balance.point_covariance`); the fit is
 generalised least squares with that covariance ``C`` (weighted least squares when every point has its own tare).
 Standard errors of the coefficients come from ``(A^T C^-1 A)^-1``; when the reduced chi-square exceeds 1
 (scatter or lack of fit beyond what the point errors explain) they are multiplied by ``sqrt(chi2_red)`` and
@@ -39,6 +40,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ornitail.balance.point_covariance import point_covariance
 from ornitail.core.errors import UserInputError
 from ornitail.core.units import quotient_unit
 
@@ -376,35 +378,6 @@ def _variance_inflation(design: np.ndarray, names: list[str]) -> dict[str, float
     return dict(zip(names, np.diag(np.linalg.inv(correlation)).tolist(), strict=True))
 
 
-def weighted_tare_covariance(
-    standard_errors: np.ndarray, tare_terms: list[tuple[np.ndarray, np.ndarray]]
-) -> np.ndarray:
-    """Covariance of the points' loads when each point's zero is a weighted sum of tares.
-
-    ``tare_terms`` holds, per tare a point uses (the tare before it, the tare after it), the tares' ids and the
-    weighted standard errors ``w * se`` (point i's zero = sum of w_ik * tare k). Tares are independent, so
-    ``cov_ij = se_i^2 delta_ij + sum_k (w_ik se_k)(w_jk se_k)`` over the tares k both points use.
-    """
-    covariance = np.diag(np.asarray(standard_errors, dtype=float) ** 2)
-    for ids_a, weighted_a in tare_terms:
-        for ids_b, weighted_b in tare_terms:
-            same = np.asarray(ids_a)[:, None] == np.asarray(ids_b)[None, :]
-            covariance = covariance + same * np.outer(weighted_a, weighted_b)
-    return covariance
-
-
-def _tare_terms(points: pd.DataFrame, column: str) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The tare terms of ``column``'s covariance: bracketing tares when the table has them, else one tare each."""
-    if "tare_after_weight" not in points or f"{column}_tare_before_se" not in points:
-        ids = points["tare_id"].to_numpy() if "tare_id" in points else np.arange(len(points))
-        return [(ids, points[f"{column}_tare_se"].to_numpy(dtype=float))]
-    after_weight = points["tare_after_weight"].to_numpy(dtype=float)
-    before = points[f"{column}_tare_before_se"].to_numpy(dtype=float) * (1.0 - after_weight)
-    after = points[f"{column}_tare_after_se"].to_numpy(dtype=float) * after_weight
-    after_ids = points["tare_after_id"].fillna("").astype(str).to_numpy()
-    return [(points["tare_id"].to_numpy(), before), (after_ids, after)]
-
-
 def _weighted_fit(
     design: np.ndarray, values: np.ndarray, covariance: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, LoadFitDiagnostics]:
@@ -506,7 +479,7 @@ def fit_stability_derivatives(
             raise UserInputError(
                 f"sweep table: {column}", "values and standard errors must be finite, errors > 0"
             )
-        covariance = weighted_tare_covariance(errors, _tare_terms(points, column))
+        covariance = point_covariance(points, column)
         coefficients, sigma, diagnostics = _weighted_fit(design, values, covariance)
         result.coefficients[load] = coefficients
         names = [f"{load}0"] + [load + variable for variable in variables]

@@ -87,5 +87,5 @@ def phase_averaged_loads(
         mean=loads.mean(axis=0),
         spread=spread,
         cycle_count=n_cycles,
-        flapping_frequency_hz=float(cycles.frequency_hz.mean()),
+        flapping_frequency_hz=cycles.mean_frequency_hz,
     )

@@ -36,7 +36,10 @@ from ornitail.balance.sweep_table import (
     table_of_points,
     tail_contribution,
 )
-from ornitail.balance.tail_statement import tail_contribution_statements
+from ornitail.balance.tail_statement import (
+    repeatability_statement,
+    tail_contribution_statements,
+)
 from ornitail.balance.tare_drift import drift_statement
 from ornitail.core.errors import UserInputError
 
@@ -107,9 +110,19 @@ def _process_configuration(
 ) -> dict[str, Any]:
     written: list[Path] = []
     record: dict[str, Any] = {"configuration": name}
-    if "drift_model" in table:
-        record["drift_statement"] = drift_statement(table["drift_model"].astype(str).tolist())
     contribution = tail_contribution(table)
+    if "drift_model" in table:
+        record["drift_statement"] = " ".join(
+            part
+            for part in (
+                drift_statement(
+                    table["drift_model"].astype(str).tolist(),
+                    table.get("drift_check", pd.Series(dtype=str)).astype(str).tolist(),
+                ),
+                repeatability_statement(contribution),
+            )
+            if part
+        )
     if len(contribution):
         path = out / f"{slug}-tail-contribution.csv"
         contribution.to_csv(path, index=False)

@@ -22,22 +22,26 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from scipy.stats import chi2
 
 from ornitail.acquisition.counter_gaps import find_counter_gaps
 from ornitail.acquisition.recording_layout import SetPointRecord
 from ornitail.acquisition.recording_reader import Recording, load_recording
 from ornitail.balance.hall_cycles import HallEdgeSettings
+from ornitail.balance.point_covariance import point_covariance
 from ornitail.balance.point_loads import (
     BODY_LOAD_NAMES,
     CycleAveragedLoads,
     cycle_averaged_loads,
     propagated_standard_error,
-    tare_volts_and_error,
+    tare_volts_and_covariance,
 )
 from ornitail.balance.tare_drift import (
+    DriftCheck,
     RecordedTare,
     RunningClock,
     TareCorrection,
+    drift_check,
     middle_sample_index,
     running_clock_of,
     tare_correction,
@@ -60,6 +64,8 @@ SATURATION_COLUMNS = (
 )
 BALANCE_RESOLUTION_N = 0.149e-3 * 9.80665
 """Nano-17 force resolution, 0.149 gram-force (domain.md section 3), N."""
+REPEATABILITY_SIGNIFICANCE = 0.01
+"""Chance of a false alarm of the repeatability check: repeats scatter beyond their errors below this p-value."""
 
 
 def balance_calibration_of(recording: Recording) -> AtiCalibration:
@@ -99,9 +105,9 @@ class MeasuredSetPoint:
         The run the point was recorded in.
     row : pandas.Series
         The point's row of :meth:`Recording.set_points_frame` (set values in SI, ``sweep``, ``motor_rpm_mean``).
-    tare_volts, tare_volts_standard_error : numpy.ndarray
-        Mean gauge voltages of the newest earlier wind-off tare at the same pitch and tail state, and their
-        standard error, shape (6,), V.
+    tare_volts, tare_volts_covariance : numpy.ndarray
+        Mean gauge voltages of the newest earlier wind-off tare at the same pitch and tail state, shape (6,), V,
+        and their covariance, shape (6, 6), V^2.
     calibration : AtiCalibration
         Balance calibration with the rig's tool transform (body frame at the rig's reference point).
     tare_id : str
@@ -112,17 +118,18 @@ class MeasuredSetPoint:
         flagged records were kept (``keep_saturated=True``).
     tare : TareCorrection, optional
         The tare before the point and, when the plan bracketed it, the tare after it with its weight; then
-        ``tare_volts`` and ``tare_volts_standard_error`` are the interpolated zero and its error.
+        ``tare_volts`` and ``tare_volts_covariance`` are the interpolated zero and its covariance.
     """
 
     recording: Recording
     row: pd.Series
     tare_volts: np.ndarray
-    tare_volts_standard_error: np.ndarray
+    tare_volts_covariance: np.ndarray
     calibration: AtiCalibration
     tare_id: str
     flags: dict[str, int] = field(default_factory=dict)
     tare: TareCorrection | None = None
+    drift_check: DriftCheck | None = None
 
     def tare_columns(self) -> dict[str, float | str]:
         """``tare_after_id``, ``tare_after_weight``, ``drift_model`` and, per body load, the standard error of
@@ -133,23 +140,35 @@ class MeasuredSetPoint:
             if correction is None or correction.after is None
             else correction.after.tare_id,
             "tare_after_weight": 0.0 if correction is None else correction.after_weight,
+            "tare_third_id": ""
+            if correction is None or correction.third is None
+            else correction.third.tare_id,
+            "tare_third_weight": 0.0 if correction is None else correction.third_weight,
             "drift_model": "" if correction is None else correction.drift_model,
         }
-        before_volts_se = (
-            self.tare_volts_standard_error
+        before = propagated_standard_error(
+            self.calibration,
+            self.tare_volts_covariance
             if correction is None
-            else correction.before.volts_standard_error
+            else correction.before.volts_covariance,
         )
-        after_volts_se = (
-            np.zeros(6)
+        after = propagated_standard_error(
+            self.calibration,
+            None
             if correction is None or correction.after is None
-            else correction.after.volts_standard_error
+            else correction.after.volts_covariance,
         )
-        before = propagated_standard_error(self.calibration, before_volts_se)
-        after = propagated_standard_error(self.calibration, after_volts_se)
+        third = propagated_standard_error(
+            self.calibration,
+            None
+            if correction is None or correction.third is None
+            else correction.third.volts_covariance,
+        )
         for index, name in enumerate(BODY_LOAD_NAMES):
             columns[f"{name}_tare_before_se"] = float(before[index])
             columns[f"{name}_tare_after_se"] = float(after[index])
+            columns[f"{name}_tare_third_se"] = float(third[index])
+        columns["drift_check"] = "" if self.drift_check is None else self.drift_check.statement()
         return columns
 
     def gauge_and_hall_volts(self) -> tuple[np.ndarray, np.ndarray]:
@@ -179,7 +198,7 @@ class MeasuredSetPoint:
                 self.tare_volts,
                 self.calibration,
                 hall_settings,
-                tare_volts_standard_error=self.tare_volts_standard_error,
+                tare_volts_covariance=self.tare_volts_covariance,
             )
         except UserInputError as error:
             raise UserInputError(
@@ -272,7 +291,7 @@ def _tare_record(tare: RecordedTare) -> SetPointRecord:
 
 def _recorded_tare(point: _RecordedPoint, clock: RunningClock) -> RecordedTare:
     frame = point.recording.set_point_frame(int(point.row["set_point_index"]))
-    volts, volts_standard_error = tare_volts_and_error(
+    volts, volts_covariance = tare_volts_and_covariance(
         frame[list(GAUGE_CHANNELS)].to_numpy(dtype=float)
     )
     return RecordedTare(
@@ -280,22 +299,47 @@ def _recorded_tare(point: _RecordedPoint, clock: RunningClock) -> RecordedTare:
         run_id=point.recording.run_id,
         running_time=clock.at(middle_sample_index(point.record)),
         volts=volts,
-        volts_standard_error=volts_standard_error,
+        volts_covariance=volts_covariance,
         record=point.record,
     )
 
 
 def _next_tare_in_run(
     points: list[_RecordedPoint], position: int, key: tuple[bool, float]
-) -> _RecordedPoint | None:
-    """The first tare with ``key`` after ``points[position]`` in the same run, or None."""
+) -> int | None:
+    """The position of the first tare with ``key`` after ``points[position]`` in the same run, or None."""
     run_id = points[position].recording.run_id
-    for later in points[position + 1 :]:
+    for later_position in range(position + 1, len(points)):
+        later = points[later_position]
         if later.recording.run_id != run_id:
             return None
         if later.row["kind"] == "tare" and _tare_key(later) == key:
-            return later
+            return later_position
     return None
+
+
+def _tares_by_run_and_pitch(
+    points: list[_RecordedPoint], recorded_tares: dict[int, RecordedTare]
+) -> dict[str, dict[tuple[bool, float], list[RecordedTare]]]:
+    """Each run's tares grouped by tail state and pitch, in recording order."""
+    grouped: dict[str, dict[tuple[bool, float], list[RecordedTare]]] = {}
+    for position, tare in sorted(recorded_tares.items()):
+        grouped.setdefault(tare.run_id, {}).setdefault(_tare_key(points[position]), []).append(tare)
+    return grouped
+
+
+def third_tare(
+    tares: list[RecordedTare], before: RecordedTare, after: RecordedTare
+) -> RecordedTare | None:
+    """The tare next to the bracketing pair among ``tares`` (one pitch of one run, in order): the one after
+    ``after``, else the one before ``before``; None when the pitch has only the two."""
+    ids = [tare.tare_id for tare in tares]
+    if after.tare_id not in ids or before.tare_id not in ids:
+        return None
+    later, earlier = ids.index(after.tare_id) + 1, ids.index(before.tare_id) - 1
+    if later < len(tares):
+        return tares[later]
+    return tares[earlier] if earlier >= 0 else None
 
 
 def measured_set_points(
@@ -318,9 +362,22 @@ def measured_set_points(
         ``keep_saturated``) a measurement or tare has saturated or over-range samples.
     """
     points = _recorded_points(Path(directory) for directory in run_directories)
-    tares: dict[tuple[bool, float], RecordedTare] = {}
     calibrations: dict[str, AtiCalibration] = {}
     clocks: dict[str, RunningClock] = {}
+    for point in points:
+        run_id = point.recording.run_id
+        if run_id not in clocks:
+            clocks[run_id] = running_clock_of(point.recording.set_points)
+    recorded_tares = {
+        position: _recorded_tare(point, clocks[point.recording.run_id])
+        for position, point in enumerate(points)
+        if point.row["kind"] == "tare"
+    }
+    grouped = _tares_by_run_and_pitch(points, recorded_tares)
+    checks = {
+        run_id: drift_check(run_id, list(by_pitch.values())) for run_id, by_pitch in grouped.items()
+    }
+    tares: dict[tuple[bool, float], RecordedTare] = {}
     measured = []
     for position, point in enumerate(points):
         row = point.row
@@ -328,11 +385,9 @@ def measured_set_points(
         if point.record.is_flagged and not keep_saturated:
             _refuse_flagged(point)
         run_id = point.recording.run_id
-        if run_id not in clocks:
-            clocks[run_id] = running_clock_of(point.recording.set_points)
         clock = clocks[run_id]
         if row["kind"] == "tare":
-            tares[key] = _recorded_tare(point, clock)
+            tares[key] = recorded_tares[position]
             continue
         before = tares.get(key)
         if before is None:
@@ -341,26 +396,29 @@ def measured_set_points(
                 f"no wind-off tare at theta = {math.degrees(row['pitch_rad']):.2f} deg "
                 f"({'tailed' if key[0] else 'tailless'}) was recorded before it",
             )
-        after = _next_tare_in_run(points, position, key)
-        correction = tare_correction(
-            before,
-            None if after is None else _recorded_tare(after, clock),
-            clock.at(middle_sample_index(point.record)),
-            run_id,
-        )
+        after_position = _next_tare_in_run(points, position, key)
+        after = None if after_position is None else recorded_tares[after_position]
         if run_id not in calibrations:
             calibrations[run_id] = balance_calibration_of(point.recording)
+        check = checks.get(run_id)
+        third = None
+        if after is not None and check is not None and check.straight_drift_rejected:
+            third = third_tare(grouped[run_id][key], before, after)
+        correction = tare_correction(
+            before, after, clock.at(middle_sample_index(point.record)), run_id, third
+        )
         flags = {**_flag_counts(point.record), **_flag_counts(_tare_record(before), "tare_")}
         measured.append(
             MeasuredSetPoint(
                 point.recording,
                 row,
                 correction.volts,
-                correction.volts_standard_error,
+                correction.volts_covariance,
                 calibrations[run_id],
                 before.tare_id,
                 flags,
                 correction,
+                check,
             )
         )
     return measured
@@ -482,18 +540,32 @@ def frequency_check_warnings(table: pd.DataFrame) -> list[str]:
 
 
 def _pooled_repeats(group: pd.DataFrame, name: str) -> pd.Series:
-    """Mean of the repeat means of one load and its standard error (see :func:`tail_contribution`)."""
+    """Mean of the repeat means of one load, its standard error and the repeatability check (see
+    :func:`tail_contribution`)."""
     means = group[name].to_numpy(dtype=float)
     count = len(means)
-    within = math.sqrt(
-        float((group[f"{name}_se"] ** 2).sum()) / count**2
-        + float(group[f"{name}_tare_se"].mean()) ** 2
-    )
-    between = float(np.std(means, ddof=1)) / math.sqrt(count) if count > 1 else 0.0
+    covariance = point_covariance(group, name)
+    standard_error = math.sqrt(float(covariance.sum())) / count
+    chi_square = 0.0
+    if count > 1:
+        # Generalised least squares: the repeats' scatter about their best common value in their own errors.
+        inverse = np.linalg.inv(covariance)
+        common = float(inverse.sum(axis=1) @ means / inverse.sum())
+        chi_square = float((means - common) @ inverse @ (means - common))
+    inflation = 1.0
+    if count > 1 and chi2.sf(chi_square, count - 1) < REPEATABILITY_SIGNIFICANCE:
+        inflation = math.sqrt(chi_square / (count - 1))
+        # The scatter speaks for the repeats' own errors only: a tare they all share moves them together.
+        own_variance = float((group[f"{name}_se"].to_numpy(dtype=float) ** 2).sum())
+        standard_error = (
+            math.sqrt(float(covariance.sum()) + (inflation**2 - 1.0) * own_variance) / count
+        )
     return pd.Series(
         {
             name: float(means.mean()),
-            f"{name}_se": max(within, between),
+            f"{name}_se": standard_error,
+            f"{name}_repeat_chi_square": chi_square,
+            f"{name}_repeat_inflation": inflation,
             f"{name}_cycle_2sigma": float(group[f"{name}_2sigma"].mean()),
             "repeats": count,
             "cycles": int(group["cycles"].sum()),
@@ -504,12 +576,18 @@ def _pooled_repeats(group: pd.DataFrame, name: str) -> pd.Series:
 def tail_contribution(table: pd.DataFrame) -> pd.DataFrame:
     """Tailed minus tailless at every set point measured both ways, with propagated uncertainty.
 
-    Repeats are pooled: the mean of the repeat means. Its standard error is the larger of (a) the propagated one,
-    ``sqrt(sum se^2 / n^2 + tare_se^2)`` (the repeats share one tare, so its error does not average out), and
-    (b) the scatter of the repeat means, ``std / sqrt(n)`` (catches drift between repeats that the cycle
-    scatter cannot see). ``<load>_sigma`` is the standard error of the difference (tailed and tailless
-    independent); ``<load>_resolvable`` says whether the difference exceeds both twice that sigma and, for
-    forces, the balance resolution (moments: twice sigma alone); ``<load>_cycle_2sigma_tailed`` and
+    Repeats are pooled: the mean of the repeat means. Its standard error is propagated from the repeats'
+    covariance (:func:`~ornitail.balance.point_covariance.point_covariance`: cycle scatter and the tares they
+    share, with their weights), ``sqrt(1' C 1) / n``. The repeatability check compares the repeats'
+    scatter with that covariance (generalised chi-square on n - 1 degrees of freedom); when it is beyond what
+    the covariance explains (p below :data:`REPEATABILITY_SIGNIFICANCE`), the repeats' own errors (their cycle
+    scatter, not the tares they share, which move them together) are multiplied by ``sqrt(chi2 / (n - 1))``
+    (``<load>_repeat_inflation_tailed`` / ``_tailless``, 1 when not inflated; ``<load>_repeat_chi_square_...``).
+    Always taking the larger of the propagated error and the repeats' ``std / sqrt(n)`` (as before) overstated
+    the error: with three repeats that scatter is a two-degree-of-freedom guess, larger than the truth half the
+    time. ``<load>_sigma`` is the standard error of the difference
+    (tailed and tailless independent); ``<load>_resolvable`` says whether the difference exceeds both twice that
+    sigma and, for forces, the balance resolution (moments: twice sigma alone); ``<load>_cycle_2sigma_tailed`` and
     ``_tailless`` are the single-cycle scatter (2 sigma over cycles). Loads about the rig's reference point, so
     tailed and tailless moments are about the same point.
     """
@@ -541,4 +619,7 @@ def tail_contribution(table: pd.DataFrame) -> pd.DataFrame:
         result[f"{name}_resolvable"] = np.abs(difference) > threshold
         result[f"{name}_cycle_2sigma_tailed"] = tailed[f"{name}_cycle_2sigma"]
         result[f"{name}_cycle_2sigma_tailless"] = tailless[f"{name}_cycle_2sigma"]
+        for label, pooled_state in (("tailed", tailed), ("tailless", tailless)):
+            for quantity in ("repeat_chi_square", "repeat_inflation"):
+                result[f"{name}_{quantity}_{label}"] = pooled_state[f"{name}_{quantity}"]
     return result.reset_index()

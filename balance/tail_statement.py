@@ -52,3 +52,26 @@ def tail_contribution_statements(contribution: pd.DataFrame) -> list[str]:
                 verdict = "NOT resolvable: below " + " and ".join(below)
             lines.append(text + verdict + ".")
     return lines
+
+
+def repeatability_statement(contribution: pd.DataFrame) -> str:
+    """One sentence on the repeatability check of a :func:`tail_contribution` table: which loads' repeats
+    scattered beyond their errors and by how much their sigma was inflated (empty for an empty table)."""
+    if contribution.empty:
+        return ""
+    inflated = []
+    for _, row in contribution.iterrows():
+        for symbol, name, _unit in _STATED_LOADS:
+            for state in ("tailed", "tailless"):
+                factor = float(row[f"{name}_repeat_inflation_{state}"])
+                if factor > 1.0:
+                    inflated.append(
+                        f"{state} {symbol} at theta {row['theta_deg']:.2f} deg (chi-square "
+                        f"{float(row[f'{name}_repeat_chi_square_{state}']):.1f} on "
+                        f"{int(row[f'repeats_{state}']) - 1}, sigma x{factor:.2f})"
+                    )
+    if not inflated:
+        return "Repeatability check: the repeats agree within their errors (no sigma inflated)."
+    return (
+        "Repeatability check: repeats scatter beyond their errors for " + "; ".join(inflated) + "."
+    )

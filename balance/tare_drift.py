@@ -12,23 +12,36 @@ per run) from the end of each tare record to the end of the last measurement rec
 motor is on from the first measurement's settling to the wind-off before a tare, off from then through the tare's
 record). The balance warms and creeps while the rig runs, not while it stands for a tare: counted in wall time, the
 wind-off and the tare's record (a tenth of a block, and more of a short one) would take a share of the drift that
-happened while the motor ran. The two tares' errors are independent, so the variance of V0 is
-``(1 - lambda)^2 se_before^2 + lambda^2 se_after^2``; points that share a tare share its error in proportion to
-their weights on it (``balance.derivatives.weighted_tare_covariance``). Without a tare after the point in the
+happened while the motor ran. The two tares' errors are independent, so the covariance of V0 is
+``(1 - lambda)^2 C_before + lambda^2 C_after``; points that share a tare share its error in proportion to
+their weights on it (``balance.point_covariance``). Without a tare after the point in the
 same run, the last tare before it is used as it is ("constant since the last tare": its drift since then is not
 corrected).
+
+Straight drift is checked, not assumed (:class:`DriftCheck`): three successive tares at one pitch test it. A
+balance warming up bends its zero over a minute; when the check rejects straight drift, each point with a third
+tare at its pitch (the next after the bracketing pair, else the one before) gets the parabola through the three,
+``V0(t) = sum_j L_j(t) V_j`` with Lagrange weights ``L_j`` in running time (the covariance ``sum_j L_j^2 C_j``).
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.stats import chi2
 
 from ornitail.acquisition.recording_layout import SetPointRecord
 
 DRIFT_MODEL_LINEAR = "linear in running time (motor on) between bracketing tares"
 DRIFT_MODEL_CONSTANT = "constant since the last tare (no tare after the point in its run)"
+DRIFT_MODEL_QUADRATIC = (
+    "quadratic in running time (motor on) through three tares (straight drift rejected)"
+)
+DRIFT_CHECK_SIGNIFICANCE = 0.01
+"""Chance of a false alarm of the drift check: straight drift is rejected below this p-value."""
 
 
 class RunningClock:
@@ -62,14 +75,14 @@ class RunningClock:
 
 @dataclass(frozen=True)
 class RecordedTare:
-    """One wind-off tare record: its mean gauge voltages and their standard error (V, shape (6,)), and where it
-    sits on its run's running clock (samples)."""
+    """One wind-off tare record: its mean gauge voltages (V, shape (6,)) and their covariance (V^2, (6, 6)), and
+    where it sits on its run's running clock (samples)."""
 
     tare_id: str
     run_id: str
     running_time: float
     volts: np.ndarray
-    volts_standard_error: np.ndarray
+    volts_covariance: np.ndarray
     record: SetPointRecord | None = None
 
 
@@ -90,57 +103,160 @@ def running_clock_of(records: list[SetPointRecord]) -> RunningClock:
 
 @dataclass(frozen=True)
 class TareCorrection:
-    """The zero subtracted from a measurement: the tare before it, and the tare after it with ``after_weight``."""
+    """The zero subtracted from a measurement: the tare before it, the tare after it with ``after_weight`` and,
+    when the run's drift bends, a third tare at the same pitch with ``third_weight`` (the tare before weighs the
+    rest, ``1 - after_weight - third_weight``)."""
 
     before: RecordedTare
     after: RecordedTare | None = None
     after_weight: float = 0.0
+    third: RecordedTare | None = None
+    third_weight: float = 0.0
+
+    @property
+    def before_weight(self) -> float:
+        return 1.0 - self.after_weight - self.third_weight
+
+    def _terms(self) -> list[tuple[RecordedTare, float]]:
+        terms = [(self.before, self.before_weight)]
+        if self.after is not None:
+            terms.append((self.after, self.after_weight))
+        if self.third is not None:
+            terms.append((self.third, self.third_weight))
+        return terms
 
     @property
     def volts(self) -> np.ndarray:
         """Interpolated gauge zero at the measurement, V."""
-        if self.after is None:
-            return self.before.volts
-        return (1.0 - self.after_weight) * self.before.volts + self.after_weight * self.after.volts
+        return sum(weight * tare.volts for tare, weight in self._terms())
 
     @property
-    def volts_standard_error(self) -> np.ndarray:
-        """Standard error of :attr:`volts`, V (the two tares independent)."""
-        if self.after is None:
-            return self.before.volts_standard_error
-        return np.hypot(
-            (1.0 - self.after_weight) * self.before.volts_standard_error,
-            self.after_weight * self.after.volts_standard_error,
-        )
+    def volts_covariance(self) -> np.ndarray:
+        """Covariance of :attr:`volts`, V^2, shape (6, 6) (the tares independent)."""
+        return sum(weight**2 * tare.volts_covariance for tare, weight in self._terms())
 
     @property
     def drift_model(self) -> str:
         """How the drift between the tares was modelled, in words for the output."""
-        return DRIFT_MODEL_CONSTANT if self.after is None else DRIFT_MODEL_LINEAR
+        if self.after is None:
+            return DRIFT_MODEL_CONSTANT
+        return DRIFT_MODEL_LINEAR if self.third is None else DRIFT_MODEL_QUADRATIC
 
 
 def tare_correction(
-    before: RecordedTare, after: RecordedTare | None, running_time: float, run_id: str
+    before: RecordedTare,
+    after: RecordedTare | None,
+    running_time: float,
+    run_id: str,
+    third: RecordedTare | None = None,
 ) -> TareCorrection:
     """Bracket a record at ``running_time`` on run ``run_id``'s running clock between ``before`` and ``after``
-    when both are in its run and the rig ran between them; else the tare before alone."""
+    when both are in its run and the rig ran between them; else the tare before alone. With ``third`` (a third
+    tare of the run at the same pitch, before ``before`` or after ``after``), the zero is the parabola through
+    the three tares (Lagrange weights in running time)."""
     if after is None or before.run_id != run_id or after.run_id != run_id:
         return TareCorrection(before)
     span = after.running_time - before.running_time
     if span <= 0:
         return TareCorrection(before)
-    weight = (running_time - before.running_time) / span
-    return TareCorrection(before, after, float(np.clip(weight, 0.0, 1.0)))
+    time = float(np.clip(running_time, before.running_time, after.running_time))
+    if third is not None and third.run_id == run_id:
+        times = (before.running_time, after.running_time, third.running_time)
+        if len({round(t, 6) for t in times}) == 3:
+            weights = [
+                math.prod((time - times[k]) / (times[j] - times[k]) for k in range(3) if k != j)
+                for j in range(3)
+            ]
+            return TareCorrection(before, after, weights[1], third, weights[2])
+    return TareCorrection(before, after, (time - before.running_time) / span)
 
 
-def drift_statement(drift_models: list[str]) -> str:
-    """One line saying how the balance's drift was treated for a configuration's points (``drift_model`` column)."""
+def drift_statement(drift_models: list[str], drift_checks: Sequence[str] = ()) -> str:
+    """One line saying how the balance's drift was treated for a configuration's points (``drift_model`` column)
+    and what the runs' drift checks saw (``drift_check`` column, one statement per run)."""
     total = len(drift_models)
-    linear = sum(model == DRIFT_MODEL_LINEAR for model in drift_models)
-    if linear == total:
-        return f"Balance drift: the zero of all {total} points interpolated {DRIFT_MODEL_LINEAR}."
-    return (
-        f"Balance drift NOT corrected for {total - linear} of {total} points: no tare after them in their run, so "
-        "the last tare is subtracted as it is and their drift since it is in their loads (plan "
-        "bracketing_tares = true measures it)."
-    )
+    constant = sum(model == DRIFT_MODEL_CONSTANT for model in drift_models)
+    quadratic = sum(model == DRIFT_MODEL_QUADRATIC for model in drift_models)
+    if constant == 0:
+        line = f"Balance drift: the zero of all {total} points interpolated {DRIFT_MODEL_LINEAR}"
+        line += f" ({quadratic} of them through three tares)." if quadratic else "."
+    else:
+        line = (
+            f"Balance drift NOT corrected for {constant} of {total} points: no tare after them in their run, so "
+            "the last tare is subtracted as it is and their drift since it is in their loads (plan "
+            "bracketing_tares = true measures it)."
+        )
+    checks = list(dict.fromkeys(check for check in drift_checks if check))
+    return " ".join([line, *checks])
+
+
+@dataclass(frozen=True)
+class DriftCheck:
+    """Whether a run's tares agree with drift that is straight between them, and what a bend costs the points.
+
+    Every three successive tares at the same pitch and tail state test the straight line: the middle one's
+    departure from the line through its neighbours, against the noise of the three (chi-square, 6 per triple).
+    When straight drift is rejected (p below :data:`DRIFT_CHECK_SIGNIFICANCE`), the points of the run that have
+    a third tare at their pitch get their zero from the parabola through three tares (:func:`tare_correction`);
+    left straight, a bend (second derivative ``c`` of the zero in running time) puts a point between tares at
+    ``t_a < t < t_b`` off by ``c / 2 (t - t_a)(t_b - t)``, the same sign for every point of a warming run, so
+    it does not average out over repeats (on the simulated rig it was three times the points' noise).
+    """
+
+    run_id: str
+    triple_chi_squares: tuple[float, ...]
+
+    @property
+    def chi_square(self) -> float:
+        return float(sum(self.triple_chi_squares))
+
+    @property
+    def degrees_of_freedom(self) -> int:
+        return 6 * len(self.triple_chi_squares)
+
+    @property
+    def p_value(self) -> float:
+        """Chance of a chi-square at least this large if the drift were straight (1 without a triple)."""
+        if not self.triple_chi_squares:
+            return 1.0
+        return float(chi2.sf(self.chi_square, self.degrees_of_freedom))
+
+    @property
+    def straight_drift_rejected(self) -> bool:
+        return self.p_value < DRIFT_CHECK_SIGNIFICANCE
+
+    def statement(self) -> str:
+        """One line for the output: what the check saw and whether it inflated the points' errors."""
+        if not self.triple_chi_squares:
+            return f"Drift check ({self.run_id}): fewer than three tares at any pitch, straight drift not tested."
+        verdict = (
+            "the drift bends between tares, so zeros are interpolated through three tares where a third is "
+            "at the pitch"
+            if self.straight_drift_rejected
+            else "consistent with straight drift between tares"
+        )
+        return (
+            f"Drift check ({self.run_id}): {len(self.triple_chi_squares)} tare triple(s), chi-square "
+            f"{self.chi_square:.1f} on {self.degrees_of_freedom} (p = {self.p_value:.2g}): {verdict}."
+        )
+
+
+def drift_check(run_id: str, tares_by_pitch: Sequence[Sequence[RecordedTare]]) -> DriftCheck:
+    """Test a run's tares for straight drift (see :class:`DriftCheck`); ``tares_by_pitch`` holds, per pitch and
+    tail state, that run's tares in running-time order."""
+    chi_squares = []
+    for tares in tares_by_pitch:
+        for first, middle, last in zip(tares, tares[1:], tares[2:], strict=False):
+            before_s = middle.running_time - first.running_time
+            after_s = last.running_time - middle.running_time
+            if before_s <= 0 or after_s <= 0:
+                continue
+            weight = before_s / (before_s + after_s)
+            departure = middle.volts - ((1 - weight) * first.volts + weight * last.volts)
+            covariance = (
+                middle.volts_covariance
+                + (1 - weight) ** 2 * first.volts_covariance
+                + weight**2 * last.volts_covariance
+            )
+            chi_squares.append(float(departure @ np.linalg.solve(covariance, departure)))
+    return DriftCheck(run_id, tuple(chi_squares))

@@ -3,7 +3,7 @@
 A simulated sweep here is one continuous :class:`TunnelSignalSource` visiting the set points of a plan in the
 plan's order (wind-off tare at each pitch, then that pitch's measurements, then, with ``bracketing_tares``, a second
 tare), so effects that accumulate over a sweep (the balance warming while the motor runs) accumulate as on the
-rig. Each record goes through the same functions as ``ornitail process`` (:func:`tare_volts_and_error`,
+rig. Each record goes through the same functions as ``ornitail process`` (:func:`tare_volts_and_covariance`,
 :func:`tare_correction`, :func:`cycle_averaged_loads`, then :func:`tail_contribution` and
 :func:`fit_stability_derivatives`), the stream's sample count being the run's clock; no real-time rig, so a sweep
 takes a few seconds. Between set points the source runs ``settle_s`` of rig time (the motor running, the balance
@@ -35,9 +35,10 @@ from ornitail.balance.point_loads import (
     BODY_LOAD_NAMES,
     cycle_averaged_loads,
     propagated_standard_error,
-    tare_volts_and_error,
+    tare_volts_and_covariance,
 )
-from ornitail.balance.tare_drift import RecordedTare, RunningClock, tare_correction
+from ornitail.balance.sweep_table import third_tare
+from ornitail.balance.tare_drift import RecordedTare, RunningClock, drift_check, tare_correction
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.calibration.tool_transform import ToolTransform
 from ornitail.sim.configuration import study_configuration
@@ -86,54 +87,91 @@ class SimulatedSweep:
                 )
             )
             stream_samples += settle_samples + record_samples
-        clock = RunningClock(
-            [
-                (point.kind == "tare", middle - record_samples / 2, middle + record_samples / 2 - 1)
-                for point, _, middle in records
-            ]
-        )
+        # One run per stretch of one tail state, as the sweep engine records them (a tail change starts a run).
+        run_ids: list[str] = []
+        run_number = 0
+        for position, (point, _, _) in enumerate(records):
+            if position and point.tail_attached != records[position - 1][0].tail_attached:
+                run_number += 1
+            run_ids.append(f"run{run_number}")
+        clocks = {
+            run_id: RunningClock(
+                [
+                    (
+                        point.kind == "tare",
+                        middle - record_samples / 2,
+                        middle + record_samples / 2 - 1,
+                    )
+                    for (point, _, middle), point_run in zip(records, run_ids, strict=True)
+                    if point_run == run_id
+                ]
+            )
+            for run_id in set(run_ids)
+        }
         tares = [
             (
                 point,
                 RecordedTare(
                     f"tare#{point.index}",
-                    "sweep",
-                    clock.at(middle),
-                    *tare_volts_and_error(block[:, :6]),
+                    run_id,
+                    clocks[run_id].at(middle),
+                    *tare_volts_and_covariance(block[:, :6]),
                 ),
             )
-            for point, block, middle in records
+            for (point, block, middle), run_id in zip(records, run_ids, strict=True)
             if point.kind == "tare"
         ]
+        by_run_and_pitch: dict[str, dict[tuple[bool, float], list[RecordedTare]]] = {}
+        for tare_point, tare in tares:
+            by_run_and_pitch.setdefault(tare.run_id, {}).setdefault(
+                (tare_point.tail_attached, tare_point.pitch_rad), []
+            ).append(tare)
+        checks = {
+            run_id: drift_check(run_id, list(by_pitch.values()))
+            for run_id, by_pitch in by_run_and_pitch.items()
+        }
         rows = []
-        for point, block, middle in records:
+        for (point, block, middle), run_id in zip(records, run_ids, strict=True):
             if point.kind == "tare":
                 continue
+            key = (point.tail_attached, point.pitch_rad)
             same = [
                 (tare_point, tare)
                 for tare_point, tare in tares
-                if (tare_point.tail_attached, tare_point.pitch_rad)
-                == (point.tail_attached, point.pitch_rad)
+                if (tare_point.tail_attached, tare_point.pitch_rad) == key
             ]
             before = [tare for tare_point, tare in same if tare_point.index < point.index][-1]
             after = next(
-                (tare for tare_point, tare in same if tare_point.index > point.index), None
+                (
+                    tare
+                    for tare_point, tare in same
+                    if tare_point.index > point.index and tare.run_id == run_id
+                ),
+                None,
             )
-            correction = tare_correction(before, after, clock.at(middle), "sweep")
+            third = None
+            if after is not None and checks[run_id].straight_drift_rejected:
+                third = third_tare(by_run_and_pitch[run_id][key], before, after)
+            running_time = clocks[run_id].at(middle)
+            correction = tare_correction(before, after, running_time, run_id, third)
             loads = cycle_averaged_loads(
                 block[:, :6],
                 block[:, 8],
                 SAMPLE_RATE_HZ,
                 correction.volts,
                 self.calibration,
-                tare_volts_standard_error=correction.volts_standard_error,
+                tare_volts_covariance=correction.volts_covariance,
             )
-            before_se = propagated_standard_error(self.calibration, before.volts_standard_error)
+            before_se = propagated_standard_error(self.calibration, before.volts_covariance)
             after_se = propagated_standard_error(
-                self.calibration, np.zeros(6) if after is None else after.volts_standard_error
+                self.calibration, None if after is None else after.volts_covariance
+            )
+            third_se = propagated_standard_error(
+                self.calibration, None if third is None else third.volts_covariance
             )
             rows.append(
                 {
+                    "run_id": run_id,
                     "tail_id": self.plan.tail_id,
                     "x_h_mm": 1000 * self.plan.x_h_m,
                     "sweep": point.sweep,
@@ -154,6 +192,13 @@ class SimulatedSweep:
                         f"{name}_tare_after_se": after_se[index]
                         for index, name in enumerate(BODY_LOAD_NAMES)
                     },
+                    "tare_third_id": "" if third is None else third.tare_id,
+                    "tare_third_weight": correction.third_weight,
+                    **{
+                        f"{name}_tare_third_se": third_se[index]
+                        for index, name in enumerate(BODY_LOAD_NAMES)
+                    },
+                    "drift_check": checks[run_id].statement(),
                 }
             )
         return pd.DataFrame(rows)

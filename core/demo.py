@@ -176,6 +176,8 @@ def _render(result: dict[str, Any]) -> str:
             "resolvable above the balance resolution and scatter: "
             + (", ".join(resolvable) if resolvable else "none")
         )
+    if result.get("drift_statement"):
+        lines.append(result["drift_statement"])
     derivatives = result.get("derivatives", {})
     if derivatives:
         lines.append("")
@@ -239,7 +241,9 @@ def demo_command(data_root: Path | None, time_scale: float, as_json: bool) -> No
         contribution = tail_contribution(table)
         if len(contribution):
             result["tail_contribution"] = contribution.iloc[0].to_dict()
-        derivatives = processed["configurations"][0].get("derivatives", {})
+        configuration = processed["configurations"][0]
+        result["drift_statement"] = configuration.get("drift_statement", "")
+        derivatives = configuration.get("derivatives", {})
         result["derivatives"] = derivatives.get("derivatives", {})
         if "tail_contribution" in result and "steady_state" in derivatives:
             result["truth"] = truth_comparison(

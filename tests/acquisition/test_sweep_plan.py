@@ -3,10 +3,12 @@
 import math
 import tomllib
 from importlib.resources import files
+from itertools import groupby
 
 import pytest
 
 from ornitail.acquisition.sweep_plan import (
+    estimated_duration_s,
     limit_violations,
     load_plan,
     plan_from_document,
@@ -31,13 +33,15 @@ def test_study_plan_expands_to_the_study_protocol():
     points = plan.set_points
     measurements = [p for p in points if p.kind == "measurement"]
     tares = [p for p in points if p.kind == "tare"]
-    # 3 tailed + 3 tailless steady states, 4 offsets for each of 3 sweeps with the tail on.
-    assert len(measurements) == 3 + 3 + 3 * 4
-    # A tare before each pitch's points and one after every block of at most 3: the steady-state pitch tailed has
-    # 11 points (3 steady states, 4 velocity and 4 frequency offsets), so 4 blocks and 5 tares; the other 4 pitches
-    # one point and 2 tares each; tailless, the 3 steady states between 2 tares.
-    assert len(tares) == 5 + 4 * 2 + 2
-    assert set_point_count(plan) == len(points)
+    # 3 tailed + 3 tailless steady states, 4 offsets for each of 3 sweeps with the tail on, and a return to the
+    # steady state after each of the 3 sweeps.
+    assert len(measurements) == 3 + 3 + 3 * 4 + 3
+    # A tare before each pitch group and one after every block of at most 2. The first tailed stretch has 11
+    # points at the steady-state pitch (a steady state, 4 velocity offsets and a return, 4 frequency offsets and a
+    # return): 6 blocks, 7 tares; the 4 other pitches and the return after the pitch sweep one point and 2 tares
+    # each; the 5 later stretches (T-less, T, T-less, T, T-less) one steady state between 2 tares each.
+    assert len(tares) == 7 + 4 * 2 + 2 + 5 * 2
+    assert set_point_count(plan) == len(points) == 48
     assert [p.index for p in points] == list(range(len(points)))
     pitches_deg = sorted({round(math.degrees(p.pitch_rad), 9) for p in measurements})
     assert pitches_deg == [20.0, 22.5, 25.0, 27.5, 30.0]
@@ -45,7 +49,7 @@ def test_study_plan_expands_to_the_study_protocol():
     assert velocities == pytest.approx([0.55, 0.675, 0.925, 1.05])
     frequencies = sorted({p.flapping_frequency_hz for p in measurements if p.sweep == "frequency"})
     assert frequencies == pytest.approx([12.1, 12.8, 14.2, 14.9])
-    assert all(p.tail_attached for p in measurements if p.sweep != "steady_state")
+    assert all(p.tail_attached for p in measurements if p.sweep not in ("steady_state",))
     assert sum(not p.tail_attached for p in measurements) == 3
     # Every measurement is bracketed by the tares at its own pitch and tail state: one before, one after.
     for point in measurements:
@@ -54,6 +58,58 @@ def test_study_plan_expands_to_the_study_protocol():
         for tare in (earlier_tares[-1], later_tares[0]):
             assert (tare.pitch_rad, tare.tail_attached) == (point.pitch_rad, point.tail_attached)
     assert all(t.tunnel_velocity_m_s == 0 and t.flapping_frequency_hz == 0 for t in tares)
+
+
+def test_the_steady_states_alternate_tailed_and_tailless_and_each_sweep_returns_to_the_reference():
+    plan = load_plan(STUDY_PLAN)
+    measurements = [p for p in plan.set_points if p.kind == "measurement"]
+    steady = [p for p in measurements if p.sweep == "steady_state"]
+    assert [p.tail_attached for p in steady] == [True, False] * 3
+    assert [p.repeat for p in steady] == [0, 0, 1, 1, 2, 2]
+    # Tail states in time: the sweeps ride in the first tailed stretch, then five tail changes.
+    stretches = [state for state, _ in groupby(p.tail_attached for p in plan.set_points)]
+    assert stretches == [True, False] * 3
+    # A reference point (the steady state) right after the last point of each sweep.
+    sweeps = [p.sweep for p in measurements if p.tail_attached and p.sweep != "steady_state"]
+    assert sweeps == ["theta"] * 2 + ["velocity"] * 4 + ["reference"] + ["frequency"] * 4 + [
+        "reference"
+    ] + ["theta"] * 2 + ["reference"]
+    for point in (p for p in measurements if p.sweep == "reference"):
+        assert (point.pitch_rad, point.tunnel_velocity_m_s, point.flapping_frequency_hz) == (
+            plan.theta0_rad,
+            plan.velocity0_m_s,
+            plan.frequency0_hz,
+        )
+    # Each tail change costs tail_change_s in the duration estimate.
+    document = study_document()
+    document["protocol"]["tail_change_s"] = 0
+    without = estimated_duration_s(plan_from_document(document))
+    assert estimated_duration_s(plan) == pytest.approx(without + 5 * 120.0)
+
+
+@pytest.mark.parametrize("interleave", [False, True])
+@pytest.mark.parametrize("reference", [False, True])
+@pytest.mark.parametrize("tailless_points", ["none", "steady_state", "all"])
+@pytest.mark.parametrize("points_per_block", [0, 1, 3])
+def test_every_protocol_variant_is_counted_without_expanding(
+    interleave, reference, tailless_points, points_per_block
+):
+    document = study_document()
+    document["protocol"].update(
+        interleave_tail_states=interleave,
+        return_to_reference=reference,
+        tailless_points=tailless_points,
+        points_per_block=points_per_block,
+    )
+    plan = plan_from_document(document)
+    assert set_point_count(plan) == len(plan.set_points)
+    measurements = [p for p in plan.set_points if p.kind == "measurement"]
+    assert sum(p.sweep == "reference" for p in measurements) == (
+        0 if not reference else 3 * (1 + (tailless_points == "all"))
+    )
+    changes = sum(1 for _ in groupby(p.tail_attached for p in plan.set_points)) - 1
+    expected_changes = 0 if tailless_points == "none" else (5 if interleave else 1)
+    assert changes == expected_changes
 
 
 def test_plan_inside_limits_has_no_violations_and_every_violation_is_listed():
@@ -97,6 +153,19 @@ def test_plan_inside_limits_has_no_violations_and_every_violation_is_listed():
         ),
         ("protocol", "record_s", 0.2, r"record_s: 0.2 s holds fewer than 5 flapping cycles"),
         ("protocol", "velocity", 1.0, r"\[protocol\]\.velocity: unknown key"),
+        ("protocol", "tail_change_s", -5.0, r"\[protocol\]\.tail_change_s: -5.0 must be >= 0"),
+        (
+            "protocol",
+            "tail_change_s",
+            1e5,
+            r"tail_change_s: 100000 s is more than the 3600 s allowed",
+        ),
+        (
+            "protocol",
+            "return_to_reference",
+            "yes",
+            r"\[protocol\]\.return_to_reference: 'yes' must be",
+        ),
         ("sweeps", "theta_deg", [0.0, 5.0], r"offset of 0 is the steady state"),
         ("sweeps", "f_hz", {"span": 1.4, "steps": 0}, r"\[sweeps\.f_hz\]\.steps: 0 must be >= 1"),
     ],
@@ -130,7 +199,9 @@ def test_offsets_as_list_and_no_tailless_points():
         tailless_points="none", wind_off_tares=False, bracketing_tares=False, points_per_block=0
     )
     plan = plan_from_document(document)
-    assert [p.sweep for p in plan.set_points] == ["steady_state"] * 3 + ["velocity"] * 2
+    assert [p.sweep for p in plan.set_points] == ["steady_state"] * 3 + ["velocity"] * 2 + [
+        "reference"
+    ]
     assert all(p.tail_attached for p in plan.set_points)
 
 
@@ -140,7 +211,13 @@ def test_bracketing_tares_need_wind_off_tares_and_are_off_unless_asked():
     document["protocol"].pop("points_per_block")
     plain = plan_from_document(document)
     assert not plain.bracketing_tares
-    assert sum(p.kind == "tare" for p in plain.set_points) == 5 + 1 == set_point_count(plain) - 18
+    # One tare per pitch group: the steady-state pitch, 4 pitch offsets and the return after the pitch sweep in the
+    # first tailed stretch, then one for each of the 5 single steady states that follow.
+    assert (
+        sum(p.kind == "tare" for p in plain.set_points)
+        == 1 + 4 + 1 + 5
+        == set_point_count(plain) - 21
+    )
     document["protocol"].update(points_per_block=3)
     with pytest.raises(UserInputError, match=r"points_per_block.*needs bracketing_tares = true"):
         plan_from_document(document, "p.toml")
@@ -158,5 +235,7 @@ def test_blocks_are_bracketed_and_counted_without_expanding(points_per_block, ta
     assert set_point_count(plan) == len(plan.set_points)
     kinds = [p.kind for p in plan.set_points]
     runs_of_measurements = "".join("t" if kind == "tare" else "m" for kind in kinds).split("t")
-    assert all(len(run) <= (points_per_block or 11) for run in runs_of_measurements)
+    # Without blocks, the longest run of measurements is the steady-state pitch with the tail on and every steady
+    # state there (3 steady states, 8 sweep offsets, 2 returns).
+    assert all(len(run) <= (points_per_block or 13) for run in runs_of_measurements)
     assert kinds[-1] == "tare"  # every block ends with its tare

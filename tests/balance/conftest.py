@@ -19,3 +19,9 @@ simulated_sweep = tunnel_coverage.simulated_sweep
 def make_simulated_sweep():
     """The :func:`simulated_sweep` factory."""
     return simulated_sweep
+
+
+@pytest.fixture
+def sweep_z_scores():
+    """``sweep_z_scores(sweep, seed, settle_s)`` of the benchmark: {quantity: (value - truth) / sigma}."""
+    return tunnel_coverage.sweep_z_scores

@@ -5,8 +5,13 @@ from importlib.resources import files
 
 import numpy as np
 import pytest
+from scipy.signal import lfilter
 
-from ornitail.balance.point_loads import cycle_averaged_loads
+from ornitail.balance.point_loads import (
+    cycle_averaged_loads,
+    propagated_standard_error,
+    tare_volts_and_covariance,
+)
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.calibration.tool_transform import ToolTransform
 from ornitail.sim.configuration import study_configuration
@@ -84,3 +89,28 @@ def test_two_sigma_intervals_of_the_mean_cover_the_truth_under_balance_noise():
     # And the stated sigma is neither too small nor too large: the scatter of the errors over 40 records
     # matches it, within about three standard deviations of the ratio (sd ~ 1/sqrt(2 * 39) = 0.11).
     assert 0.7 <= np.std(errors, ddof=1) / np.mean(sigmas) <= 1.4
+
+
+def test_the_tare_error_counts_noise_the_gauges_share_and_noise_correlated_in_time():
+    """Load-space noise seen through the inverse calibration (correlated gauges) and AR(1) noise (correlated in
+    time) both give a tare error whose stated size matches the scatter of tare means over many records."""
+    calibration = AtiCalibration.from_file(CALIBRATION_PATH)
+    to_volts = np.linalg.inv(calibration.matrix_si)
+    generator = np.random.default_rng(3)
+    means, stated = [], []
+    for _ in range(200):
+        white = generator.normal(size=(8_000, 6)) * np.array([3e-3] * 3 + [1.5e-5] * 3)
+        # AR(1) with coefficient 0.9: the variance of a long mean is (1 + 0.9) / (1 - 0.9) = 19 times the
+        # independent-sample value, which a plain std / sqrt(n) would miss. Batches of 200 samples see about
+        # 1 - 2 * 0.9 / (200 * 0.1) = 91 % of it (ratio below ~1.05).
+        correlated = lfilter([1.0], [1.0, -0.9], white, axis=0)
+        volts, covariance = tare_volts_and_covariance(correlated @ to_volts.T)
+        means.append(calibration.matrix_si @ volts)
+        stated.append(propagated_standard_error(calibration, covariance))
+    ratio = np.std(means, axis=0, ddof=1) / np.sqrt(np.mean(np.square(stated), axis=0))
+    # 200 records: the sd of a scatter-to-stated ratio is about 1 / sqrt(2 * 200) = 0.05 from the scatter and
+    # about 0.02 from the 39 batch degrees of freedom; expected about 1.05 (the batches), so 0.8..1.3 is over
+    # 4 sd either way. Independent gauges
+    # would state up to 3x too much here, independent samples sqrt(19) = 4.4x too little.
+    np.testing.assert_array_less(0.8, ratio)
+    np.testing.assert_array_less(ratio, 1.3)

@@ -7,7 +7,7 @@ import pytest
 
 from ornitail.balance.cycle_averages import segment_sums
 from ornitail.balance.phase_loads import phase_averaged_loads
-from ornitail.balance.point_loads import cycle_averaged_loads, tare_volts_and_error
+from ornitail.balance.point_loads import cycle_averaged_loads, tare_volts_and_covariance
 from ornitail.balance.sweep_table import frequency_check_warnings, frequency_cross_check_record
 from ornitail.calibration.flapping_frequency_check import FLAPPING_GEAR_RATIO
 from ornitail.core.errors import UserInputError
@@ -24,7 +24,7 @@ def tare_and_record(sweep, seconds, seed=0):
     source.set_operating_point(
         pitch_rad=PITCH_RAD, tunnel_velocity_m_s=0.0, flapping_frequency_hz=0.0
     )
-    tare = tare_volts_and_error(source.next_block(10_000)[:, :6])
+    tare = tare_volts_and_covariance(source.next_block(10_000)[:, :6])
     source.set_operating_point(tunnel_velocity_m_s=VELOCITY_M_S, flapping_frequency_hz=FREQUENCY_HZ)
     source.next_block(2_000)
     return tare, source.next_block(int(seconds * SAMPLE_RATE_HZ))
@@ -118,10 +118,10 @@ def test_standard_error_is_honest_over_seeds_with_the_tare_noise_included(make_s
     truth = sweep.truth(PITCH_RAD, VELOCITY_M_S, FREQUENCY_HZ)
     scores = []
     for seed in range(25):
-        (tare, tare_error), record = tare_and_record(sweep, 1.0, seed=seed)
+        (tare, tare_covariance), record = tare_and_record(sweep, 1.0, seed=seed)
         loads = cycle_averaged_loads(
             record[:, :6], record[:, 8], SAMPLE_RATE_HZ, tare, sweep.calibration,
-            tare_volts_standard_error=tare_error,
+            tare_volts_covariance=tare_covariance,
         )  # fmt: skip
         scores.append((loads.mean[[0, 2, 4]] - truth) / loads.total_standard_error[[0, 2, 4]])
     scores = np.array(scores)

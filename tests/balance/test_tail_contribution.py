@@ -10,7 +10,7 @@ import pytest
 
 from ornitail.acquisition.sweep_plan import plan_from_document
 from ornitail.balance.sweep_table import BALANCE_RESOLUTION_N, tail_contribution
-from ornitail.balance.tail_statement import tail_contribution_statements
+from ornitail.balance.tail_statement import repeatability_statement, tail_contribution_statements
 from ornitail.sim.effects import EffectSet
 
 LOADS = ("x_n", "z_n", "m_n_m")
@@ -51,7 +51,8 @@ def test_tail_contribution_covers_the_simulator_truth(make_simulated_sweep):
 
 
 def repeat_table(means_by_state, se=1e-5, tare_se=2e-5, two_sigma=1e-3):
-    """A cycle-averaged table of repeats at one point: ``means_by_state[tailed]`` lists the repeat means."""
+    """A cycle-averaged table of repeats at one point: ``means_by_state[tailed]`` lists the repeat means; the
+    repeats of a state share one tare."""
     rows = []
     for tailed, means in means_by_state.items():
         for repeat, mean in enumerate(means):
@@ -61,6 +62,7 @@ def repeat_table(means_by_state, se=1e-5, tare_se=2e-5, two_sigma=1e-3):
                 "theta_deg": 25.0,
                 "v_m_s": 0.8,
                 "f_set_hz": 13.5,
+                "tare_id": f"tare-{tailed}",
             }
             row["cycles"] = 26
             for name in ("x_n", "y_n", "z_n", "l_n_m", "m_n_m", "n_n_m"):
@@ -70,19 +72,34 @@ def repeat_table(means_by_state, se=1e-5, tare_se=2e-5, two_sigma=1e-3):
     return pd.DataFrame(rows)
 
 
-def test_repeats_pool_with_the_shared_tare_and_the_repeat_scatter():
+def test_repeats_pool_with_the_shared_tare_and_inflate_only_when_they_scatter_beyond_their_errors():
     consistent = tail_contribution(repeat_table({True: [0.1, 0.1, 0.1], False: [0.09, 0.09, 0.09]}))
     # Repeats agree: sigma per state = sqrt(3 se^2 / 9 + tare_se^2) (the three share one tare), then in quadrature.
     per_state = math.sqrt(3 * 1e-5**2 / 9 + 2e-5**2)
     assert consistent.loc[0, "x_n"] == pytest.approx(0.01)
     assert consistent.loc[0, "x_n_sigma"] == pytest.approx(math.sqrt(2) * per_state)
+    assert consistent.loc[0, "x_n_repeat_inflation_tailed"] == 1.0
+    assert repeatability_statement(consistent).endswith(
+        "agree within their errors (no sigma inflated)."
+    )
+    # Scatter of about one stated error (chi-square 2 on 2 degrees of freedom, p = 0.37): no inflation.
+    within = tail_contribution(
+        repeat_table({True: [0.1 - 1e-5, 0.1, 0.1 + 1e-5], False: [0.09, 0.09, 0.09]})
+    )
+    assert within.loc[0, "x_n_repeat_chi_square_tailed"] == pytest.approx(2.0)
+    assert within.loc[0, "x_n_sigma"] == pytest.approx(math.sqrt(2) * per_state)
     scattered = tail_contribution(
         repeat_table({True: [0.099, 0.1, 0.101], False: [0.09, 0.09, 0.09]})
     )
-    # Repeats scatter by 1e-3 (sd), far beyond their stated errors: the tailed sigma is sd / sqrt(3).
+    # Repeats scatter by 1e-3 (sd), far beyond their stated 1e-5: chi-square 2e4 on 2. Their own errors grow to
+    # the scatter (sd^2 / 3 for the mean); the shared tare stays as it was.
+    assert scattered.loc[0, "x_n_repeat_chi_square_tailed"] == pytest.approx(2e4)
+    assert scattered.loc[0, "x_n_repeat_inflation_tailed"] == pytest.approx(100.0)
     assert scattered.loc[0, "x_n_sigma"] == pytest.approx(
-        math.hypot(1e-3 / math.sqrt(3), per_state)
+        math.hypot(math.sqrt(1e-3**2 / 3 + 2e-5**2), per_state)
     )
+    statement = repeatability_statement(scattered)
+    assert "tailed X at theta 25.00 deg (chi-square 20000.0 on 2, sigma x100.00)" in statement
 
 
 @pytest.mark.parametrize(

@@ -3,26 +3,31 @@
 import numpy as np
 import pytest
 
-from ornitail.balance.derivatives import weighted_tare_covariance
+from ornitail.balance.point_covariance import weighted_tare_covariance
+from ornitail.balance.sweep_table import third_tare
 from ornitail.balance.tare_drift import (
     DRIFT_MODEL_CONSTANT,
     DRIFT_MODEL_LINEAR,
+    DRIFT_MODEL_QUADRATIC,
     RecordedTare,
     RunningClock,
+    drift_check,
     drift_statement,
     tare_correction,
 )
 
-BEFORE = RecordedTare("run#0", "run", 1_000.0, np.full(6, 0.010), np.full(6, 3e-5))
-AFTER = RecordedTare("run#9", "run", 11_000.0, np.full(6, 0.030), np.full(6, 4e-5))
-EARLIER = RecordedTare("run#1", "run", 500.0, AFTER.volts, AFTER.volts_standard_error)
+BEFORE = RecordedTare("run#0", "run", 1_000.0, np.full(6, 0.010), np.diag(np.full(6, 3e-5**2)))
+AFTER = RecordedTare("run#9", "run", 11_000.0, np.full(6, 0.030), np.diag(np.full(6, 4e-5**2)))
+EARLIER = RecordedTare("run#1", "run", 500.0, AFTER.volts, AFTER.volts_covariance)
 
 
 def test_a_point_between_two_tares_gets_the_zero_interpolated_in_time():
     correction = tare_correction(BEFORE, AFTER, 3_500.0, "run")  # a quarter of the way
     assert correction.after_weight == pytest.approx(0.25)
     np.testing.assert_allclose(correction.volts, 0.75 * 0.010 + 0.25 * 0.030)
-    np.testing.assert_allclose(correction.volts_standard_error, np.hypot(0.75 * 3e-5, 0.25 * 4e-5))
+    np.testing.assert_allclose(
+        np.sqrt(np.diag(correction.volts_covariance)), np.hypot(0.75 * 3e-5, 0.25 * 4e-5)
+    )
     assert correction.drift_model == DRIFT_MODEL_LINEAR
 
 
@@ -91,8 +96,8 @@ def test_the_running_clock_counts_only_from_a_tare_to_the_last_point_before_the_
     assert clock.at(949.5) == clock.at(800.0) == 600.0  # standing: wind-off and the tare's record
     assert clock.at(1549.5) == 1000.0
     # A point halfway through the running between two tares gets weight one half, wherever the standing time is.
-    first = RecordedTare("r#0", "r", clock.at(49.5), np.zeros(6), np.ones(6))
-    second = RecordedTare("r#3", "r", clock.at(949.5), np.ones(6), np.ones(6))
+    first = RecordedTare("r#0", "r", clock.at(49.5), np.zeros(6), np.eye(6))
+    second = RecordedTare("r#3", "r", clock.at(949.5), np.ones(6), np.eye(6))
     assert tare_correction(first, second, clock.at(399.0), "r").after_weight == pytest.approx(0.5)
 
 
@@ -102,3 +107,64 @@ def test_the_drift_statement_says_whether_every_point_was_corrected():
     )
     partly = drift_statement([DRIFT_MODEL_LINEAR, DRIFT_MODEL_CONSTANT, DRIFT_MODEL_CONSTANT])
     assert partly.startswith("Balance drift NOT corrected for 2 of 3 points")
+
+
+def _tares_on(drift, times, noise_v=1e-5, seed=0):
+    """Tares at ``times`` (running samples) whose gauge zeros follow ``drift(t)`` (V) plus white noise."""
+    generator = np.random.default_rng(seed)
+    covariance = np.diag(np.full(6, noise_v**2))
+    return [
+        RecordedTare(f"r#{index}", "r", t, drift(t) + generator.normal(0, noise_v, 6), covariance)
+        for index, t in enumerate(times)
+    ]
+
+
+TIMES = (0.0, 100_000.0, 200_000.0, 300_000.0)
+GAUGE_RATES = np.array([1.0, -2.0, 0.5, 3.0, -1.0, 2.0])
+
+
+def test_straight_drift_passes_the_check_and_a_bend_is_caught_and_followed():
+    """Zeros straight in time pass (chi-square near its 12 degrees of freedom); zeros on a parabola 30 noise
+    steps deep fail it, and the zero through three tares lands on the parabola where the straight line misses."""
+    straight = _tares_on(lambda t: 1e-8 * t * GAUGE_RATES, TIMES)
+    check = drift_check("r", [straight])
+    assert check.degrees_of_freedom == 12 and not check.straight_drift_rejected
+    assert "consistent with straight drift" in check.statement()
+
+    def bent(t):
+        return (
+            3e-4 * (t / 100_000.0) * (3.0 - t / 100_000.0) * GAUGE_RATES
+        )  # 30x the noise at its peak
+
+    tares = _tares_on(bent, TIMES)
+    check = drift_check("r", [tares])
+    assert check.straight_drift_rejected and check.p_value < 1e-10
+    assert "the drift bends between tares" in check.statement()
+    point_time = 150_000.0  # between the second and third tare
+    before, after = tares[1], tares[2]
+    third = third_tare(tares, before, after)
+    assert third is tares[3]  # the next after the bracketing pair
+    quadratic = tare_correction(before, after, point_time, "r", third)
+    straight_line = tare_correction(before, after, point_time, "r")
+    assert quadratic.drift_model == DRIFT_MODEL_QUADRATIC
+    assert (
+        quadratic.before_weight + quadratic.after_weight + quadratic.third_weight
+        == pytest.approx(1)
+    )
+    truth = bent(point_time)
+    # The parabola is exact up to the tares' noise (weights 0.375, 0.75, -0.125: 0.85 of one tare's noise);
+    # the straight line misses by the bend, 3e-4 * 0.25 per unit rate.
+    assert np.abs(quadratic.volts - truth).max() < 5 * 0.85e-5 * np.abs(GAUGE_RATES).max()
+    assert np.abs(straight_line.volts - truth).max() > 5e-5
+    np.testing.assert_allclose(
+        np.diag(quadratic.volts_covariance), (0.375**2 + 0.75**2 + 0.125**2) * 1e-10
+    )
+    # At the end of the series the third tare is the one before the pair; with only two there is none.
+    assert third_tare(tares, tares[2], tares[3]) is tares[1]
+    assert third_tare(tares[:2], tares[0], tares[1]) is None
+
+
+def test_fewer_than_three_tares_at_a_pitch_leave_straight_drift_untested():
+    check = drift_check("r", [_tares_on(lambda t: 0 * GAUGE_RATES, TIMES[:2])])
+    assert check.p_value == 1.0 and not check.straight_drift_rejected
+    assert "straight drift not tested" in check.statement()
