@@ -22,6 +22,9 @@ class FlappingMotorDriver(LineInstrumentDriver):
         The rig's motor speed limit, rev/min.
     """
 
+    model = "ORNI-MOTOR"
+    """The model its ``ID?`` reply names (docs/instrument-protocols.md)."""
+
     def __init__(
         self,
         port: str,

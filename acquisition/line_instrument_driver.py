@@ -25,6 +25,9 @@ class LineInstrumentDriver:
         Command that brings the instrument to rest (sent by :meth:`safe_state`).
     """
 
+    model: str
+    """The model the instrument's ``ID?`` reply names (set by each driver)."""
+
     def __init__(
         self, port: str, *, name: str, baud: int = DEFAULT_LINE_BAUD, safe_state_command: str
     ) -> None:

@@ -22,7 +22,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
@@ -60,6 +60,9 @@ class Rig:
     balance : SerialDaqDriver | NetCanOemDriver, by ``[balance].route``, set by :meth:`connect`.
     simulators : SimulatedRigInstruments | None
         The running simulators of a simulated rig (fault injection in tests), else None.
+    safe_state_outcome : dict[str, str]
+        The last :meth:`safe_state` (also run by :meth:`close`), per actuator created (fan, motor, strut):
+        ``"safe"`` (confirmed), ``"failed"`` (no confirmation) or ``"not connected"`` (its port never opened).
     """
 
     def __init__(self, description: RigDescription) -> None:
@@ -85,6 +88,7 @@ class Rig:
         self.balance: SerialDaqDriver | NetCanOemDriver | None = None
         self.simulators: SimulatedRigInstruments | None = None
         self.simulator_control: SimulatorControl | None = None
+        self.safe_state_outcome: dict[str, str] = {}
         self._time_scale = description.time_scale if description.simulated else 1.0
         self._balance_clock: tuple[float, float] | None = None  # (rig time at start, s; rate, Hz)
 
@@ -113,72 +117,94 @@ class Rig:
         InstrumentError
             An instrument is absent or does not answer; the instruments already open are made safe and closed.
         """
-        description = self.description
-        limits = description.limits
-        fan_port, strut_port, motor_port = (
-            description.fan.port,
-            description.strut.port,
-            description.motor.port,
-        )
-        daq_port = description.serial_daq.port
-        can_interface, can_channel = description.can.interface, description.can.channel
         try:
-            if description.simulator_control is not None:
-                self.simulator_control = SimulatorControl(description.simulator_control)
-                self._time_scale = float(self.simulator_control.state()["time_scale"])
-            if description.simulated:
-                self.simulators = SimulatedRigInstruments.start(
-                    description, self.calibration, self.tunnel_table
-                )
-                fan_port, strut_port = (
-                    self.simulators.fan.port_path,
-                    self.simulators.strut.port_path,
-                )
-                motor_port = self.simulators.motor.port_path
-                if self.simulators.daq_board is not None:
-                    daq_port = self.simulators.daq_board.port_path
-                can_interface, can_channel = "virtual", self.simulators.can_channel or can_channel
-            simulated = description.simulated or description.simulator_control is not None
-            reply_timeout_s = SIMULATED_REPLY_TIMEOUT_S if simulated else REPLY_TIMEOUT_S
-            self.fan = TunnelFanDriver(
-                fan_port, max_rpm=self.max_fan_rpm, baud=description.fan.baud
-            )
-            self.fan.connection.reply_timeout_s = reply_timeout_s
-            self.fan.open()
-            self.motor = FlappingMotorDriver(
-                motor_port, max_rpm=limits.max_motor_rpm, baud=description.motor.baud
-            )
-            self.motor.connection.reply_timeout_s = reply_timeout_s
-            self.motor.open()
-            self.strut = StrutPitchDriver(
-                strut_port,
-                pitch_min_rad=limits.pitch_min_rad,
-                pitch_max_rad=limits.pitch_max_rad,
-                baud=description.strut.baud,
-            )
-            self.strut.connection.reply_timeout_s = reply_timeout_s
-            self.strut.open()
-            if description.balance_route == "serial_daq":
-                self.balance = SerialDaqDriver(
-                    daq_port, baud=description.serial_daq.baud, reply_timeout_s=reply_timeout_s
-                )
-            else:
-                self.balance = NetCanOemDriver(
-                    interface=can_interface,
-                    channel=can_channel,
-                    bit_rate=description.can.bit_rate,
-                    base_id=description.can.base_id,
-                )
-            self.balance.open()
+            self.start_simulation()
+            fan, motor, strut, balance = self.create_drivers()
+            for driver in (fan, motor, strut, balance):
+                driver.open()
             errors = self.safe_state()  # whatever a crashed host left running
             if errors:
                 raise errors[0]
             if home_strut:
-                self.strut.home(timeout_s=max(5.0, 60.0 / self._time_scale))
+                strut.home(timeout_s=max(5.0, 60.0 / self._time_scale))
         except BaseException:
             self.close(raise_errors=False)
             raise
         return self
+
+    def start_simulation(self) -> None:
+        """Reach the rig's simulated instruments: start them in this process (``[rig].simulated``) or ask their
+        server for its time scale (``[rig].simulator_control``); nothing for real instruments.
+
+        Raises
+        ------
+        InstrumentDisconnected
+            The simulator server's control socket does not answer.
+        """
+        description = self.description
+        if description.simulator_control is not None and self.simulator_control is None:
+            self.simulator_control = SimulatorControl(description.simulator_control)
+            self._time_scale = float(self.simulator_control.state()["time_scale"])
+        if description.simulated and self.simulators is None:
+            self.simulators = SimulatedRigInstruments.start(
+                description, self.calibration, self.tunnel_table
+            )
+
+    def create_drivers(
+        self,
+    ) -> tuple[
+        TunnelFanDriver, FlappingMotorDriver, StrutPitchDriver, SerialDaqDriver | NetCanOemDriver
+    ]:
+        """Create (not open) the fan, motor, strut and balance drivers on the rig file's ports, or on the
+        simulators' ptys and virtual CAN channel once :meth:`start_simulation` started them; they become
+        :attr:`fan`, :attr:`motor`, :attr:`strut` and :attr:`balance`, which :meth:`close` makes safe and closes."""
+        description = self.description
+        ports = {
+            "fan": description.fan.port,
+            "strut": description.strut.port,
+            "motor": description.motor.port,
+            "daq": description.serial_daq.port,
+        }
+        can_interface, can_channel = description.can.interface, description.can.channel
+        if self.simulators is not None:
+            simulators = self.simulators
+            ports.update(
+                fan=simulators.fan.port_path,
+                strut=simulators.strut.port_path,
+                motor=simulators.motor.port_path,
+            )
+            if simulators.daq_board is not None:
+                ports["daq"] = simulators.daq_board.port_path
+            can_interface, can_channel = "virtual", simulators.can_channel or can_channel
+        simulated = description.simulated or description.simulator_control is not None
+        reply_timeout_s = SIMULATED_REPLY_TIMEOUT_S if simulated else REPLY_TIMEOUT_S
+        limits = description.limits
+        self.fan = TunnelFanDriver(
+            ports["fan"], max_rpm=self.max_fan_rpm, baud=description.fan.baud
+        )
+        self.motor = FlappingMotorDriver(
+            ports["motor"], max_rpm=limits.max_motor_rpm, baud=description.motor.baud
+        )
+        self.strut = StrutPitchDriver(
+            ports["strut"],
+            pitch_min_rad=limits.pitch_min_rad,
+            pitch_max_rad=limits.pitch_max_rad,
+            baud=description.strut.baud,
+        )
+        for driver in (self.fan, self.motor, self.strut):
+            driver.connection.reply_timeout_s = reply_timeout_s
+        if description.balance_route == "serial_daq":
+            self.balance = SerialDaqDriver(
+                ports["daq"], baud=description.serial_daq.baud, reply_timeout_s=reply_timeout_s
+            )
+        else:
+            self.balance = NetCanOemDriver(
+                interface=can_interface,
+                channel=can_channel,
+                bit_rate=description.can.bit_rate,
+                base_id=description.can.base_id,
+            )
+        return self.fan, self.motor, self.strut, self.balance
 
     def __enter__(self) -> Rig:
         return self.connect()
@@ -187,15 +213,40 @@ class Rig:
         self.close(raise_errors=exc_type is None)
 
     def safe_state(self) -> list[InstrumentError]:
-        """Motor off, fan to zero, strut halted; every step is tried. Returns the errors met."""
+        """Motor off, fan to zero, strut halted; every step is tried. Returns the errors met and sets
+        :attr:`safe_state_outcome` (kept as it was when the rig is closed: a second close does not erase it)."""
         errors: list[InstrumentError] = []
-        for driver in (self.motor, self.fan, self.strut):
-            if driver is not None and driver.connection.is_open:
+        drivers = [driver for driver in (self.motor, self.fan, self.strut) if driver is not None]
+        if not drivers:
+            return errors
+        outcome: dict[str, str] = {}
+        for driver in drivers:
+            outcome[driver.name] = "not connected"
+            if driver.connection.is_open:
                 try:
                     driver.safe_state()
+                    outcome[driver.name] = "safe"
                 except InstrumentError as error:
                     errors.append(error)
+                    outcome[driver.name] = "failed"
+        self.safe_state_outcome = outcome
         return errors
+
+    def safe_state_summary(self, unsafe: Iterable[str] = ()) -> str:
+        """What the last :meth:`safe_state` (or :meth:`close`) did, as a clause of one line: the actuators whose
+        safe state was confirmed, not confirmed (also those named in ``unsafe``) and never connected."""
+        outcome = self.safe_state_outcome
+        failed = sorted({*unsafe, *(name for name, said in outcome.items() if said == "failed")})
+        safe = sorted(name for name, said in outcome.items() if said == "safe")
+        absent = sorted(name for name, said in outcome.items() if said == "not connected")
+        if not failed and not safe:
+            return "no actuator was connected, so none was brought to its safe state"
+        clauses = (
+            ("safe state not confirmed", failed),
+            ("safe state confirmed", safe),
+            ("not connected", absent),
+        )
+        return "; ".join(f"{what}: {', '.join(names)}" for what, names in clauses if names)
 
     def close(self, *, raise_errors: bool = True) -> list[InstrumentError]:
         """Safe state first, then close every driver and simulator; raise the first error last (or, with

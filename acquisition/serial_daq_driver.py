@@ -104,6 +104,9 @@ class SerialDaqDriver:
         Blocks discarded because the queue was full.
     """
 
+    model = "ORNI-DAQ9"
+    """The model its ``ID?`` reply names (docs/daq-protocol.md)."""
+
     def __init__(
         self,
         port: str,

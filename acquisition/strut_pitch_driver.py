@@ -34,6 +34,9 @@ class StrutPitchDriver(LineInstrumentDriver):
         The rig's pitch limits, rad (set points outside are refused before sending).
     """
 
+    model = "ORNI-STRUT"
+    """The model its ``ID?`` reply names (docs/instrument-protocols.md)."""
+
     def __init__(
         self,
         port: str,

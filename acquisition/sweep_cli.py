@@ -309,7 +309,7 @@ def _connect_and_sweep(
         result = _summary_from_files(plan, data_root, runs_before, resume, interrupt, failure)
     else:
         interrupt = None  # it came after run_sweep had ended (while the progress bar closed): nothing it stopped
-    result = _with_exit_path(result, interrupt, close_errors)
+    result = _with_exit_path(result, interrupt, close_errors, rig)
     held_back = signals.pending_signal
     if interrupt is None and held_back is not None and result.status == "aborted":
         result.exit_code = (
@@ -357,7 +357,10 @@ def _summary_from_files(
 
 
 def _with_exit_path(
-    result: SweepResult, interrupt: SweepInterrupted | None, close_errors: list[InstrumentError]
+    result: SweepResult,
+    interrupt: SweepInterrupted | None,
+    close_errors: list[InstrumentError],
+    rig: Rig,
 ) -> SweepCommandResult:
     """Add the safe-state outcome, the one-line error and the exit code to ``result``."""
     if not isinstance(result, SweepCommandResult):
@@ -370,11 +373,7 @@ def _with_exit_path(
             for error in close_errors
         ),
     ]
-    safe_text = (
-        f"safe state not confirmed for {', '.join(unsafe)}; the other instruments are in their safe state"
-        if unsafe
-        else "motor, fan and strut are in their safe state"
-    )
+    safe_text = rig.safe_state_summary(unsafe)
     if interrupt is not None:
         result.exit_code = interrupt.exit_code
         result.error = f"ornitail: sweep {interrupt}; every recorded set point is kept; {safe_text}"

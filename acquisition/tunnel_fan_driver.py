@@ -18,6 +18,9 @@ class TunnelFanDriver(LineInstrumentDriver):
         Highest fan speed the rig allows (from the rig's velocity limit), rev/min.
     """
 
+    model = "ORNI-FAN"
+    """The model its ``ID?`` reply names (docs/instrument-protocols.md)."""
+
     def __init__(
         self, port: str, *, max_rpm: float, name: str = "tunnel fan", baud: int = DEFAULT_LINE_BAUD
     ) -> None:

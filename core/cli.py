@@ -55,6 +55,7 @@ def main() -> None:
 
 
 def _register_area_commands() -> None:
+    from ornitail.acquisition.rig_check_cli import rig_group
     from ornitail.acquisition.runs_cli import runs_command
     from ornitail.acquisition.sweep_cli import sweep_command
     from ornitail.balance.process_cli import process_command
@@ -75,6 +76,7 @@ def _register_area_commands() -> None:
     main.add_command(gap_group)
     main.add_command(gui_command)
     main.add_command(process_command)
+    main.add_command(rig_group)
     main.add_command(runs_command)
     main.add_command(sim_group)
     main.add_command(sweep_command)

@@ -144,7 +144,11 @@ class RigSession:
     def _connect(self, rig_file: Path, time_scale: float | None) -> None:
         self._disconnect()
         rig = Rig.from_file(rig_file, time_scale=time_scale)
-        rig.connect()
+        try:
+            rig.connect()
+        except InstrumentError as error:  # connect() made safe and closed what it had opened
+            self.post("error", f"connect: {error}; {rig.safe_state_summary()}")
+            return
         try:
             self.live = LiveBalance(rig, self.display_decimation)
             self.live.start()

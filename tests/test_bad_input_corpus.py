@@ -138,6 +138,8 @@ FILE_SLOTS: dict[str, tuple[str, tuple[str, ...]]] = {
     ),
     "sweep-rig-calibration": (".cal", ("sweep", "{ws}/ok/plan.toml", "--rig", "{rig_cal}")),
     "sweep-rig-tunnel-table": (".csv", ("sweep", "{ws}/ok/plan.toml", "--rig", "{rig_table}")),
+    "rig-check": (".toml", ("rig", "check", "{f}")),
+    "rig-check-calibration": (".cal", ("rig", "check", "{rig_cal}")),
     "calibration-show": (".cal", ("calibration", "show", "--cal", "{f}")),
     "calibration-convert": (
         ".cal",
@@ -631,6 +633,10 @@ for parent in UNWRITABLE_PARENTS:
         expect=parent.replace("{ws}/", ""),
     )
 case("sweep-options", "plan-missing-argument", "sweep", expect="PLAN")
+case("rig-options", "rig-missing-argument", "rig", "check", expect="RIG")
+case(
+    "rig-options", "unknown-option", "rig", "check", "{ws}/ok/rig.toml", "--bogus", expect="--bogus"
+)
 case("sweep-options", "unknown-option", "sweep", "{ws}/ok/plan.toml", "--bogus", expect="--bogus")
 
 # -- 4. calibration -----------------------------------------------------------------------------

@@ -1,0 +1,317 @@
+"""Checking a rig before a run: which ports the machine has, and whether each instrument of a rig file answers.
+
+:func:`check_rig` reads the rig file, reaches the simulated instruments if the rig is simulated, and checks each
+instrument on its own, so one that fails does not hide the others: open its port exclusively, identify it, read
+one sample, bring it to its safe state (fan stopped, strut halted, motor off, board not streaming), close. Nothing
+is moved: the strut is not homed and no set point is sent. An instrument whose identity is not the model its
+driver speaks is closed without any further command (two ports swapped in the rig file would otherwise get each
+other's commands). The result is plain data (:class:`RigCheck`); ``ornitail rig check`` prints it.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import can
+from serial.tools import list_ports
+
+from ornitail.acquisition.daq_protocol import CHANNEL_NAMES
+from ornitail.acquisition.instrument_errors import (
+    InstrumentDisconnected,
+    InstrumentError,
+    InstrumentInUse,
+)
+from ornitail.acquisition.line_instrument_driver import LineInstrumentDriver
+from ornitail.acquisition.netcanoem_driver import NetCanOemDriver
+from ornitail.acquisition.rig import Rig
+from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
+from ornitail.acquisition.strut_pitch_driver import StrutPitchDriver
+
+FIRST_SAMPLE_TIMEOUT_S = 5.0
+"""How long the DAQ board may take to deliver its first sample after ``START``, s."""
+STATUS_OK, STATUS_FAILED, STATUS_IN_USE = "ok", "failed", "in_use"
+
+Reading = dict[str, float | int | bool]
+
+
+@dataclass(frozen=True)
+class SerialPortFound:
+    """A serial port the operating system lists: device path and its description (USB product, ``n/a``)."""
+
+    device: str
+    description: str
+
+
+@dataclass(frozen=True)
+class CanChannelFound:
+    """A CAN channel python-can detects: interface (``socketcan``, ``pcan``, ...) and channel (``can0``)."""
+
+    interface: str
+    channel: str
+
+
+@dataclass(frozen=True)
+class InstrumentCheck:
+    """One instrument as checked.
+
+    ``rig_file_key`` names where the rig file sets its route (``[fan].port``); ``route`` is the port or CAN
+    interface:channel used (the simulator's pty on a simulated rig). ``status`` is ``"ok"``, ``"failed"`` or
+    ``"in_use"`` (another process holds the port); ``problem`` says what failed, in one line. ``reading`` holds
+    the sample read, keyed with its unit (``fan_rpm``, ``pitch_deg``, ``gauge_0_v``).
+    """
+
+    instrument: str
+    rig_file_key: str
+    route: str
+    status: str
+    identity: str | None = None
+    reading: Reading = field(default_factory=dict)
+    problem: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        """True when the instrument was identified, read and brought to its safe state."""
+        return self.status == STATUS_OK
+
+
+@dataclass(frozen=True)
+class RigCheck:
+    """What :func:`check_rig` found: the ports of this machine and one :class:`InstrumentCheck` per instrument."""
+
+    rig_file: Path
+    rig_name: str
+    simulated: bool
+    serial_ports: list[SerialPortFound]
+    can_interfaces_searched: list[str]
+    can_channels: list[CanChannelFound]
+    instruments: list[InstrumentCheck]
+
+    @property
+    def ok(self) -> bool:
+        """True when every instrument is ok."""
+        return all(check.ok for check in self.instruments)
+
+
+def serial_ports_found() -> list[SerialPortFound]:
+    """The serial ports the operating system lists (pyserial's ``list_ports``), sorted by device path."""
+    return sorted(
+        (SerialPortFound(port.device, port.description) for port in list_ports.comports()),
+        key=lambda port: port.device,
+    )
+
+
+def can_channels_found(interfaces: list[str]) -> list[CanChannelFound]:
+    """The CAN channels python-can detects on ``interfaces`` (an interface it cannot load finds none)."""
+    found = can.detect_available_configs(interfaces=interfaces)
+    return sorted(
+        {CanChannelFound(str(config["interface"]), str(config["channel"])) for config in found},
+        key=lambda channel: (channel.interface, channel.channel),
+    )
+
+
+def _can_interfaces_to_search(rig: Rig) -> list[str]:
+    """socketcan on Linux and the rig file's CAN interface (python-can's in-process ``virtual`` bus is not hardware)."""
+    interfaces = {"socketcan"} if sys.platform.startswith("linux") else set()
+    if rig.description.balance_route == "can":
+        interfaces.add(rig.description.can.interface)
+    interfaces.discard("virtual")
+    return sorted(interfaces)
+
+
+def check_rig(rig_path: str | Path) -> RigCheck:
+    """Check every instrument of the rig file ``rig_path`` (see the module docstring).
+
+    Raises
+    ------
+    UserInputError
+        A mistake in the rig file or the files it names (nothing is opened).
+    """
+    rig = Rig.from_file(rig_path)
+    description = rig.description
+    checks: list[InstrumentCheck] = []
+    try:
+        simulator = _start_simulation(rig)
+        if simulator is not None:  # served by another process: its control socket is checked too
+            checks.append(simulator)
+        checks += _check_instruments(rig)
+    finally:
+        rig.close(raise_errors=False)
+    can_interfaces = _can_interfaces_to_search(rig)
+    return RigCheck(
+        rig_file=description.path,
+        rig_name=description.name,
+        simulated=description.simulated or description.simulator_control is not None,
+        serial_ports=serial_ports_found(),
+        can_interfaces_searched=can_interfaces,
+        can_channels=can_channels_found(can_interfaces),
+        instruments=checks,
+    )
+
+
+def _start_simulation(rig: Rig) -> InstrumentCheck | None:
+    """Start the rig's simulators in this process, or reach their server: the check of the server's control socket
+    (None for a rig not served by another process)."""
+    control = rig.description.simulator_control
+    try:
+        rig.start_simulation()
+    except InstrumentError as error:
+        return InstrumentCheck(
+            error.instrument_name,
+            "[rig].simulator_control",
+            str(control),
+            STATUS_FAILED,
+            problem=error.problem,
+        )
+    if control is None:
+        return None
+    return InstrumentCheck(
+        "rig simulator",
+        "[rig].simulator_control",
+        str(control),
+        STATUS_OK,
+        identity="ornitail rig simulator server",
+        reading={"time_scale": float(rig.recording_description()["time_scale"])},
+    )
+
+
+def _check_instruments(rig: Rig) -> list[InstrumentCheck]:
+    fan, motor, strut, balance = rig.create_drivers()
+    if isinstance(balance, SerialDaqDriver):
+        rate_hz = rig.description.serial_daq.sample_rate_hz
+        balance_check = _check_daq_board(balance, rate_hz)
+    else:
+        balance_check = _check_netcanoem(balance)
+    return [
+        balance_check,
+        _check_line_instrument(fan, "[fan].port", lambda: {"fan_rpm": fan.read_rpm()}),
+        _check_line_instrument(strut, "[strut].port", lambda: _strut_reading(strut)),
+        _check_line_instrument(motor, "[motor].port", lambda: {"motor_rpm": motor.read_rpm()}),
+    ]
+
+
+def _strut_reading(strut: StrutPitchDriver) -> Reading:
+    return {"pitch_deg": math.degrees(strut.read_pitch_rad()), "homed": strut.status().homed}
+
+
+def _identity_fields(reply: str) -> dict[str, str]:
+    """``ID model=ORNI-FAN serial=SIM00001 firmware=1.0.0`` -> ``{"model": "ORNI-FAN", ...}``."""
+    return dict(word.split("=", 1) for word in reply.split()[1:] if "=" in word)
+
+
+def _refused(route: str, key: str, name: str, error: InstrumentError) -> InstrumentCheck:
+    status = STATUS_IN_USE if isinstance(error, InstrumentInUse) else STATUS_FAILED
+    return InstrumentCheck(name, key, route, status, problem=error.problem)
+
+
+def _read_then_make_safe(
+    read: Callable[[], Reading], make_safe: Callable[[], None]
+) -> tuple[Reading, str | None]:
+    """Read one sample, then bring the instrument to its safe state whatever happened; (reading, problem)."""
+    reading: Reading = {}
+    problems: list[str] = []
+    try:
+        reading = read()
+    except InstrumentError as error:
+        problems.append(error.problem)
+    try:
+        make_safe()
+    except InstrumentError as error:
+        problems.append(f"safe state not confirmed: {error.problem}")
+    return reading, "; ".join(problems) or None
+
+
+def _check_line_instrument(
+    driver: LineInstrumentDriver, key: str, read: Callable[[], Reading]
+) -> InstrumentCheck:
+    """``ID?``, one reading, the safe-state command (STOP, HALT, OFF), close."""
+    route = driver.connection.port
+    try:
+        reply = driver.open()
+    except InstrumentError as error:
+        return _refused(route, key, driver.name, error)
+    try:
+        fields = _identity_fields(reply)
+        identity = " ".join(f"{name}={value}" for name, value in fields.items()) or reply
+        expected = driver.model
+        if fields.get("model") != expected:
+            problem = (
+                f"{route} answers as {fields.get('model', reply)!r}, not {expected}: "
+                f"is {key} the port of another instrument?"
+            )
+            return InstrumentCheck(
+                driver.name, key, route, STATUS_FAILED, identity, problem=problem
+            )
+        reading, problem = _read_then_make_safe(read, driver.safe_state)
+    finally:
+        driver.close()
+    status = STATUS_FAILED if problem else STATUS_OK
+    return InstrumentCheck(driver.name, key, route, status, identity, reading, problem)
+
+
+def _check_daq_board(board: SerialDaqDriver, sample_rate_hz: float) -> InstrumentCheck:
+    """``STOP`` and ``ID?`` (the driver's open), the rig file's rate, one streamed sample, ``STOP``, close."""
+    key = "[balance.serial_daq].port"
+    try:
+        identity = board.open()
+    except InstrumentError as error:
+        return _refused(board.port, key, board.name, error)
+    try:
+        text = (
+            f"model={identity.model} serial={identity.serial_number} firmware={identity.firmware}"
+        )
+        if identity.model != board.model:
+            problem = f"{board.port} answers as {identity.model!r}, not {board.model}: is {key} the right port?"
+            return InstrumentCheck(
+                board.name, key, board.port, STATUS_FAILED, text, problem=problem
+            )
+        reading, problem = _read_then_make_safe(
+            lambda: _first_daq_sample(board, sample_rate_hz), board.stop
+        )
+    finally:
+        board.close()
+    status = STATUS_FAILED if problem else STATUS_OK
+    return InstrumentCheck(board.name, key, board.port, status, text, reading, problem)
+
+
+def _first_daq_sample(board: SerialDaqDriver, sample_rate_hz: float) -> Reading:
+    board.set_sample_rate(sample_rate_hz)
+    board.start()
+    deadline = time.monotonic() + FIRST_SAMPLE_TIMEOUT_S
+    while time.monotonic() < deadline:
+        block = board.get_block(timeout_s=0.1)
+        if block is not None and len(block.counters):
+            volts = block.volts[0]
+            return {
+                "sample_rate_hz": float(board.sample_rate_hz or sample_rate_hz),
+                **{name: float(value) for name, value in zip(CHANNEL_NAMES, volts, strict=True)},
+            }
+    raise InstrumentDisconnected(
+        board.name, f"no sample within {FIRST_SAMPLE_TIMEOUT_S:g} s after START on {board.port}"
+    )
+
+
+def _check_netcanoem(board: NetCanOemDriver) -> InstrumentCheck:
+    """Serial number (the driver's open) and firmware, one polled gauge sample, close (it is never left polling)."""
+    key = "[balance.can]"
+    route = f"{board.interface}:{board.channel}"
+    try:
+        serial_number = board.open()
+    except InstrumentError as error:
+        return _refused(route, key, board.name, error)
+    try:
+        identity = f"serial={serial_number} firmware={board.read_firmware_version()}"
+        gauges = board.read_gauges()
+    except InstrumentError as error:
+        return InstrumentCheck(board.name, key, route, STATUS_FAILED, problem=error.problem)
+    finally:
+        board.close()
+    reading: Reading = {"status_word": int(gauges.status_word)}
+    reading.update(
+        {f"gauge_{index}_counts": int(value) for index, value in enumerate(gauges.gauges)}
+    )
+    return InstrumentCheck(board.name, key, route, STATUS_OK, identity, reading)
