@@ -41,11 +41,18 @@ class SharedTunnelSignals:
         configuration: Any = None,
         effects: Any = None,
     ) -> SharedTunnelSignals:
-        """Build the project's ``TunnelSignalSource`` and wrap it."""
+        """Build the project's ``TunnelSignalSource`` and wrap it.
+
+        The source feeds simulated acquisition boards, which digitise the gauges with their own ADC; so the
+        source's own quantisation (effect ``balance_resolution``) is switched off and the signal is quantised
+        once, by the board, as on the real rig (its noise stays).
+        """
+        from ornitail.sim.effects import EffectSet
         from ornitail.sim.tunnel import TunnelSignalSource
 
+        analog = (effects or EffectSet()).replace_effect("balance_resolution", quantise=False)
         source = TunnelSignalSource(
-            configuration=configuration, effects=effects, seed=seed, sample_rate_hz=sample_rate_hz
+            configuration=configuration, effects=analog, seed=seed, sample_rate_hz=sample_rate_hz
         )
         return cls(source, sample_rate_hz)
 

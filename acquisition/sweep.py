@@ -9,6 +9,8 @@ never jumps; every set point is a range of rows in that stream. Stopping:
 
 - :meth:`SweepStop.request` (the first Ctrl-C) finishes the current set point and then ends the run as
   ``aborted``;
+- :meth:`SweepStop.abort` (the window's Abort) ends it at its next wait, also as ``aborted``; the point in
+  progress is dropped;
 - a ``KeyboardInterrupt`` (the second Ctrl-C) ends it at once, also as ``aborted``;
 - an instrument error (unplugged, no reply) ends it as ``failed`` with the instrument named.
 
@@ -48,7 +50,6 @@ from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.run_files import read_journal, run_is_live
 from ornitail.acquisition.sweep_plan import (
     SetPoint,
-    SettleCriteria,
     SweepPlan,
     limit_violations,
     motor_rpm_violations,
@@ -65,19 +66,34 @@ MAX_RETAKES = 3
 
 
 class SweepStop:
-    """A thread-safe request to stop after the current set point (what the first Ctrl-C sets)."""
+    """Thread-safe stop requests: after the current set point (the first Ctrl-C), or now (the GUI's Abort).
+
+    Both are flags the sweep reads between its short waits (at most ``POLL_INTERVAL_S`` of rig time apart), so a
+    stop never lands inside a driver transaction or a file write.
+    """
 
     def __init__(self) -> None:
-        self._event = threading.Event()
+        self._after_point = threading.Event()
+        self._now = threading.Event()
 
     def request(self) -> None:
         """Ask the sweep to stop once the current set point is recorded."""
-        self._event.set()
+        self._after_point.set()
+
+    def abort(self) -> None:
+        """Ask the sweep to stop at its next wait; the set point in progress is dropped."""
+        self._after_point.set()
+        self._now.set()
 
     @property
     def requested(self) -> bool:
-        """True once :meth:`request` was called."""
-        return self._event.is_set()
+        """True once :meth:`request` or :meth:`abort` was called."""
+        return self._after_point.is_set()
+
+    @property
+    def abort_requested(self) -> bool:
+        """True once :meth:`abort` was called."""
+        return self._now.is_set()
 
 
 class SettleTimeout(InstrumentError):
@@ -348,14 +364,17 @@ def _move(rig: Rig, point: SetPoint) -> None:
     rig.set_flapping_frequency(point.flapping_frequency_hz)
 
 
-def _wait_rig_s(rig: Rig, seconds: float, stream: LiveBalance) -> None:
-    """Wait ``seconds`` of rig time, checking the balance stream for errors."""
-    rig.wait_simulated_s(seconds)
-    stream.raise_if_failed()
+def _wait_rig_s(context: _SweepContext, seconds: float) -> None:
+    """Wait ``seconds`` of rig time, then check the balance stream for errors and the stop for an abort."""
+    context.rig.wait_simulated_s(seconds)
+    context.stream.raise_if_failed()
+    if context.stop.abort_requested:
+        raise RunAborted("aborted by the operator")
 
 
-def _settle(rig: Rig, point: SetPoint, criteria: SettleCriteria, stream: LiveBalance) -> float:
+def _settle(context: _SweepContext, point: SetPoint) -> float:
     """Wait until pitch, velocity and frequency stay within tolerance; return the rig time it took, s."""
+    rig, criteria = context.rig, context.plan.settle
     targets = (
         (
             "pitch",
@@ -404,29 +423,24 @@ def _settle(rig: Rig, point: SetPoint, criteria: SettleCriteria, stream: LiveBal
             stable_since_s = now_s
         elif now_s - stable_since_s >= criteria.stable_for_s:
             return now_s - started_s
-        _wait_rig_s(rig, POLL_INTERVAL_S, stream)
+        _wait_rig_s(context, POLL_INTERVAL_S)
 
 
-def _take_rows(rig: Rig, recorder: Recorder, stream: LiveBalance, count: int) -> int:
+def _take_rows(context: _SweepContext, recorder: Recorder, count: int) -> int:
     """Wait for ``count`` rows sampled from now on; return the first one's row index."""
-    _wait_rig_s(rig, RECORD_START_DELAY_S, stream)
-    samples_since_start = rig.balance_samples_since_start()
-    first = stream.first_row_sampled_after(samples_since_start)
+    _wait_rig_s(context, RECORD_START_DELAY_S)
+    samples_since_start = context.rig.balance_samples_since_start()
+    first = context.stream.first_row_sampled_after(samples_since_start)
     while first is None:
-        _wait_rig_s(rig, 0.05, stream)
-        first = stream.first_row_sampled_after(samples_since_start)
+        _wait_rig_s(context, 0.05)
+        first = context.stream.first_row_sampled_after(samples_since_start)
     while recorder.next_sample_index < first + count:
-        _wait_rig_s(rig, 0.05, stream)
+        _wait_rig_s(context, 0.05)
     return first
 
 
 def _record_point(
-    rig: Rig,
-    recorder: Recorder,
-    stream: LiveBalance,
-    point: SetPoint,
-    sample_rate_hz: float,
-    settle_s: float,
+    context: _SweepContext, recorder: Recorder, point: SetPoint, settle_s: float
 ) -> SetPointRecord:
     """Take the ``record_s`` of the stream sampled from now on as this point's rows and journal it.
 
@@ -435,13 +449,14 @@ def _record_point(
     gaps: an overloaded link) is taken again, up to ``MAX_RETAKES`` times; what the kept record lost is journalled
     as ``samples_missing_in_record``. The recorder fills in the record's saturated and over-range row counts.
     """
-    count = int(round(point.record_s * sample_rate_hz))
+    rig, stream = context.rig, context.stream
+    count = int(round(point.record_s * context.plan.sample_rate_hz))
     retakes = 0
-    first = _take_rows(rig, recorder, stream, count)
+    first = _take_rows(context, recorder, count)
     missing = stream.samples_missing_in_rows(first, count)
     while missing and retakes < MAX_RETAKES:
         retakes += 1
-        first = _take_rows(rig, recorder, stream, count)
+        first = _take_rows(context, recorder, count)
         missing = stream.samples_missing_in_rows(first, count)
     record = SetPointRecord(
         plan_point_index=point.index,
@@ -505,9 +520,9 @@ def _run_tail_state(
                 started_s = rig.now_s()
                 context.emit("moving", point)
                 _move(rig, point)
-                settle_s = _settle(rig, point, plan.settle, stream)
+                settle_s = _settle(context, point)
                 context.emit("settled", point)
-                record = _record_point(rig, recorder, stream, point, plan.sample_rate_hz, settle_s)
+                record = _record_point(context, recorder, point, settle_s)
                 if record.samples_missing_in_record:
                     context.lossy_points[point.index] = (
                         f"set point {point.label} lost {record.samples_missing_in_record} samples "

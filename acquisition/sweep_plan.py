@@ -141,6 +141,8 @@ class SweepPlan:
     sample_rate_hz: float
     settle: SettleCriteria
     source: str = "<plan>"
+    bracketing_tares: bool = False
+    points_per_block: int = 0
     set_points: tuple[SetPoint, ...] = field(default=(), compare=False)
 
     def configuration_record(self) -> dict[str, Any]:
@@ -218,6 +220,8 @@ def plan_from_document(document: dict[str, Any], source: str = "<plan>") -> Swee
             "sweep_repeats",
             "tailless_points",
             "wind_off_tares",
+            "bracketing_tares",
+            "points_per_block",
             "record_s",
             "sample_rate_hz",
         },
@@ -286,7 +290,19 @@ def plan_from_document(document: dict[str, Any], source: str = "<plan>") -> Swee
         sample_rate_hz=protocol.number("sample_rate_hz", 10_000.0, positive=True),
         settle=settle,
         source=source,
+        bracketing_tares=protocol.boolean("bracketing_tares", False),
+        points_per_block=protocol.integer("points_per_block", 0, minimum=0, maximum=MAX_REPEATS),
     )
+    if plan.bracketing_tares and not plan.wind_off_tares:
+        raise UserInputError(
+            protocol.where("bracketing_tares"),
+            "true needs wind_off_tares = true (the tares it adds after each block bracket the tares before it)",
+        )
+    if plan.points_per_block and not plan.bracketing_tares:
+        raise UserInputError(
+            protocol.where("points_per_block"),
+            f"{plan.points_per_block} needs bracketing_tares = true (blocks are bracketed by wind-off tares)",
+        )
     if not MIN_SAMPLE_RATE_HZ <= plan.sample_rate_hz <= MAX_SAMPLE_RATE_HZ:
         raise UserInputError(
             protocol.where("sample_rate_hz"),
@@ -335,8 +351,25 @@ def set_point_count(plan: SweepPlan) -> int:
             total += sweep_points * plan.sweep_repeats
         if plan.wind_off_tares:
             pitch_offsets = plan.sweep_offsets.get("theta", ()) if with_sweeps else ()
-            total += len({plan.theta0_rad, *(plan.theta0_rad + o for o in pitch_offsets)})
+            steady_pitch_points = plan.steady_state_repeats + plan.sweep_repeats * sum(
+                len(plan.sweep_offsets.get(variable, ())) for variable in ("velocity", "frequency")
+            ) * int(with_sweeps)
+            points_at_pitches = [steady_pitch_points] + [plan.sweep_repeats] * len(
+                {offset for offset in pitch_offsets if offset != 0}
+            )
+            total += sum(_tares_at_a_pitch(plan, count) for count in points_at_pitches)
     return total
+
+
+def _tares_at_a_pitch(plan: SweepPlan, point_count: int) -> int:
+    """Wind-off tares at one pitch: one before its points and, with bracketing, one after each block of at most
+    ``points_per_block`` (all of them when 0)."""
+    if not plan.wind_off_tares:
+        return 0
+    if not plan.bracketing_tares:
+        return 1
+    blocks = -(-point_count // plan.points_per_block) if plan.points_per_block else 1
+    return 1 + blocks
 
 
 def estimated_duration_s(plan: SweepPlan, point_count: int | None = None) -> float:
@@ -398,29 +431,35 @@ def _measurements_for_tail_state(plan: SweepPlan, tail_attached: bool) -> list[d
 
 
 def _with_set_points(plan: SweepPlan) -> SweepPlan:
-    """Expand the plan: for each tail state, each pitch in increasing order gets its tare, then its points."""
+    """Expand the plan: for each tail state, each pitch in increasing order gets its tare, then its points (with
+    ``bracketing_tares``, a tare at the same pitch after each block of at most ``points_per_block`` of them, so the
+    balance's drift across every block is measured)."""
     tail_states = [True] if plan.tailless_points == "none" else [True, False]
     ordered: list[dict[str, Any]] = []
     for tail_attached in tail_states:
         measurements = _measurements_for_tail_state(plan, tail_attached)
         for pitch_rad in sorted({point["pitch_rad"] for point in measurements}):
-            if plan.wind_off_tares:
-                ordered.append(
-                    {
-                        "kind": "tare",
-                        "sweep": "tare",
-                        "repeat": 0,
-                        "pitch_rad": pitch_rad,
-                        "tunnel_velocity_m_s": 0.0,
-                        "flapping_frequency_hz": 0.0,
-                        "tail_attached": tail_attached,
-                    }
-                )
-            ordered.extend(
+            tare = {
+                "kind": "tare",
+                "sweep": "tare",
+                "repeat": 0,
+                "pitch_rad": pitch_rad,
+                "tunnel_velocity_m_s": 0.0,
+                "flapping_frequency_hz": 0.0,
+                "tail_attached": tail_attached,
+            }
+            at_pitch = [
                 {**point, "kind": "measurement", "tail_attached": tail_attached}
                 for point in measurements
                 if point["pitch_rad"] == pitch_rad
-            )
+            ]
+            if plan.wind_off_tares:
+                ordered.append(tare)
+            size = plan.points_per_block or len(at_pitch)
+            for block, start in enumerate(range(0, len(at_pitch), size), start=1):
+                ordered.extend(at_pitch[start : start + size])
+                if plan.bracketing_tares:
+                    ordered.append({**tare, "repeat": block})
     set_points = tuple(
         SetPoint(index=index, record_s=plan.record_s, **point)
         for index, point in enumerate(ordered)

@@ -18,7 +18,9 @@ the steady-state stream direction) for the velocity sweep, ``dV_across**p`` (acr
 remove the chord bias. ``max_sweep_order=1`` gives the plain straight-line fit.
 
 Weights: the points' covariance is the cycle scatter of each point (``se**2`` on the diagonal) plus the noise of
-each wind-off tare, shared by every point corrected with that tare (``tare_se**2`` between them); the fit is
+each wind-off tare, shared by every point corrected with that tare (``tare_se**2`` between them; with bracketing
+tares a point's zero is ``(1 - lambda)`` times the tare before plus ``lambda`` times the tare after, and two points
+share each tare's error in proportion to their weights on it, see :func:`weighted_tare_covariance`); the fit is
 generalised least squares with that covariance ``C`` (weighted least squares when every point has its own tare).
 Standard errors of the coefficients come from ``(A^T C^-1 A)^-1``; when the reduced chi-square exceeds 1
 (scatter or lack of fit beyond what the point errors explain) they are multiplied by ``sqrt(chi2_red)`` and
@@ -38,6 +40,7 @@ import numpy as np
 import pandas as pd
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.units import quotient_unit
 
 LOADS = (("X", "x_n", "N"), ("Z", "z_n", "N"), ("M", "m_n_m", "N m"))
 """Load symbol, its column in the cycle-averaged table, its unit."""
@@ -62,10 +65,7 @@ _SWEEP_COORDINATES = {"velocity": "dV_along", "theta": "dV_across", "frequency":
 def derivative_unit(load: str, variable: str) -> str:
     """Unit of ``d load / d variable``: N/(m/s), N m/(m/s), N/Hz or N m/Hz."""
     load_unit = dict((symbol, unit) for symbol, _, unit in LOADS)[load]
-    variable_unit = dict(VARIABLES)[variable]
-    return (
-        f"{load_unit}/({variable_unit})" if "/" in variable_unit else f"{load_unit}/{variable_unit}"
-    )
+    return quotient_unit(load_unit, dict(VARIABLES)[variable])
 
 
 def body_velocities(theta_rad: np.ndarray | float, v_m_s: np.ndarray | float) -> tuple:
@@ -376,21 +376,33 @@ def _variance_inflation(design: np.ndarray, names: list[str]) -> dict[str, float
     return dict(zip(names, np.diag(np.linalg.inv(correlation)).tolist(), strict=True))
 
 
-def point_covariance(
-    standard_errors: np.ndarray, tare_standard_errors: np.ndarray, tare_ids: np.ndarray | None
+def weighted_tare_covariance(
+    standard_errors: np.ndarray, tare_terms: list[tuple[np.ndarray, np.ndarray]]
 ) -> np.ndarray:
-    """Covariance of the points' loads: cycle scatter per point plus the error of each shared tare.
+    """Covariance of the points' loads when each point's zero is a weighted sum of tares.
 
-    Points corrected with the same tare (same ``tare_ids`` entry) share its error, so their tare parts are
-    fully correlated; without ``tare_ids`` every point is taken to have its own tare.
+    ``tare_terms`` holds, per tare a point uses (the tare before it, the tare after it), the tares' ids and the
+    weighted standard errors ``w * se`` (point i's zero = sum of w_ik * tare k). Tares are independent, so
+    ``cov_ij = se_i^2 delta_ij + sum_k (w_ik se_k)(w_jk se_k)`` over the tares k both points use.
     """
-    tare = np.asarray(tare_standard_errors, dtype=float)
-    if tare_ids is None:
-        shared = np.eye(len(tare), dtype=bool)
-    else:
-        ids = np.asarray(tare_ids)
-        shared = ids[:, None] == ids[None, :]
-    return np.diag(np.asarray(standard_errors, dtype=float) ** 2) + shared * np.outer(tare, tare)
+    covariance = np.diag(np.asarray(standard_errors, dtype=float) ** 2)
+    for ids_a, weighted_a in tare_terms:
+        for ids_b, weighted_b in tare_terms:
+            same = np.asarray(ids_a)[:, None] == np.asarray(ids_b)[None, :]
+            covariance = covariance + same * np.outer(weighted_a, weighted_b)
+    return covariance
+
+
+def _tare_terms(points: pd.DataFrame, column: str) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The tare terms of ``column``'s covariance: bracketing tares when the table has them, else one tare each."""
+    if "tare_after_weight" not in points or f"{column}_tare_before_se" not in points:
+        ids = points["tare_id"].to_numpy() if "tare_id" in points else np.arange(len(points))
+        return [(ids, points[f"{column}_tare_se"].to_numpy(dtype=float))]
+    after_weight = points["tare_after_weight"].to_numpy(dtype=float)
+    before = points[f"{column}_tare_before_se"].to_numpy(dtype=float) * (1.0 - after_weight)
+    after = points[f"{column}_tare_after_se"].to_numpy(dtype=float) * after_weight
+    after_ids = points["tare_after_id"].fillna("").astype(str).to_numpy()
+    return [(points["tare_id"].to_numpy(), before), (after_ids, after)]
 
 
 def _weighted_fit(
@@ -484,7 +496,6 @@ def fit_stability_derivatives(
             **{name: NOT_MEASURABLE_STATEMENT for name in NOT_MEASURABLE_CLAMPED},
         },
     )
-    tare_ids = points["tare_id"].to_numpy() if "tare_id" in points else None
     for load, column, _ in LOADS:
         values = points[column].to_numpy(dtype=float)
         errors = points[f"{column}_se"].to_numpy(dtype=float)
@@ -495,7 +506,7 @@ def fit_stability_derivatives(
             raise UserInputError(
                 f"sweep table: {column}", "values and standard errors must be finite, errors > 0"
             )
-        covariance = point_covariance(errors, tare_errors, tare_ids)
+        covariance = weighted_tare_covariance(errors, _tare_terms(points, column))
         coefficients, sigma, diagnostics = _weighted_fit(design, values, covariance)
         result.coefficients[load] = coefficients
         names = [f"{load}0"] + [load + variable for variable in variables]

@@ -122,7 +122,7 @@ def cycle_averaged_loads(
         standard_error=standard_error_of_cycle_mean(per_cycle, adjacent),
         flapping_frequency_hz=float(cycles.frequency_hz.mean()),
         rejected_cycles=cycles.rejected_count,
-        tare_standard_error=_propagated_standard_error(calibration, tare_volts_standard_error),
+        tare_standard_error=propagated_standard_error(calibration, tare_volts_standard_error),
     )
 
 
@@ -164,9 +164,10 @@ def tare_volts_and_error(tare_gauge_volts: np.ndarray) -> tuple[np.ndarray, np.n
     return samples.mean(axis=0), samples.std(axis=0, ddof=1) / np.sqrt(len(samples))
 
 
-def _propagated_standard_error(
+def propagated_standard_error(
     calibration: AtiCalibration, volts_standard_error: np.ndarray | None
 ) -> np.ndarray:
+    """Standard error of the six loads (N, N m) from independent errors of the six gauge voltages (V)."""
     if volts_standard_error is None:
         return np.zeros(6)
     matrix = calibration.matrix_si

@@ -57,6 +57,7 @@ def _render(result: dict[str, Any]) -> str:
                     f"{name:6s}{entry['value']:>+14.6g}{entry['sigma']:>12.2g}  {entry['unit']}"
                 )
             lines += derivatives["statements"][1:]
+        lines += [configuration["drift_statement"]] if "drift_statement" in configuration else []
         lines += configuration.get("tail_statements", [])
     lines.append("")
     lines += [f"wrote {path}" for path in result["written"]]

@@ -37,6 +37,7 @@ from ornitail.balance.sweep_table import (
     tail_contribution,
 )
 from ornitail.balance.tail_statement import tail_contribution_statements
+from ornitail.balance.tare_drift import drift_statement
 from ornitail.core.errors import UserInputError
 
 CYCLE_AVERAGES_FILE = "cycle-averages.csv"
@@ -106,6 +107,8 @@ def _process_configuration(
 ) -> dict[str, Any]:
     written: list[Path] = []
     record: dict[str, Any] = {"configuration": name}
+    if "drift_model" in table:
+        record["drift_statement"] = drift_statement(table["drift_model"].astype(str).tolist())
     contribution = tail_contribution(table)
     if len(contribution):
         path = out / f"{slug}-tail-contribution.csv"

@@ -3,7 +3,9 @@
 Everything needed comes from the recordings themselves: the raw voltages, the set-point table, the balance
 calibration file named in the run metadata (its content hash is checked) and the rig's tool transform. Each
 measurement uses the newest wind-off tare taken before it at the same pitch and tail state, searched across all
-runs of the sweep (a resumed sweep may have its tare in an earlier run).
+runs of the sweep (a resumed sweep may have its tare in an earlier run); when the plan bracketed the point with a
+second tare after it in the same run, the gauge zero is interpolated linearly in time between the two
+(:mod:`ornitail.balance.tare_drift`), which corrects the balance's drift between them.
 
 Records the data cannot support are refused, each in one line naming the run and the set point: a record with
 samples lost inside it (counter gaps), and a record with samples saturated at the ADC limit or over the sensor's
@@ -29,7 +31,16 @@ from ornitail.balance.point_loads import (
     BODY_LOAD_NAMES,
     CycleAveragedLoads,
     cycle_averaged_loads,
+    propagated_standard_error,
     tare_volts_and_error,
+)
+from ornitail.balance.tare_drift import (
+    RecordedTare,
+    RunningClock,
+    TareCorrection,
+    middle_sample_index,
+    running_clock_of,
+    tare_correction,
 )
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.calibration.flapping_frequency_check import (
@@ -99,6 +110,9 @@ class MeasuredSetPoint:
         ``saturated_samples`` and ``over_range_samples`` of the point's record and ``tare_saturated_samples``
         and ``tare_over_range_samples`` of its tare's (-1: the recording did not check); non-zero only when
         flagged records were kept (``keep_saturated=True``).
+    tare : TareCorrection, optional
+        The tare before the point and, when the plan bracketed it, the tare after it with its weight; then
+        ``tare_volts`` and ``tare_volts_standard_error`` are the interpolated zero and its error.
     """
 
     recording: Recording
@@ -108,6 +122,35 @@ class MeasuredSetPoint:
     calibration: AtiCalibration
     tare_id: str
     flags: dict[str, int] = field(default_factory=dict)
+    tare: TareCorrection | None = None
+
+    def tare_columns(self) -> dict[str, float | str]:
+        """``tare_after_id``, ``tare_after_weight``, ``drift_model`` and, per body load, the standard error of
+        the tare before and of the tare after (N, N m; unweighted, 0 without a tare after)."""
+        correction = self.tare
+        columns: dict[str, float | str] = {
+            "tare_after_id": ""
+            if correction is None or correction.after is None
+            else correction.after.tare_id,
+            "tare_after_weight": 0.0 if correction is None else correction.after_weight,
+            "drift_model": "" if correction is None else correction.drift_model,
+        }
+        before_volts_se = (
+            self.tare_volts_standard_error
+            if correction is None
+            else correction.before.volts_standard_error
+        )
+        after_volts_se = (
+            np.zeros(6)
+            if correction is None or correction.after is None
+            else correction.after.volts_standard_error
+        )
+        before = propagated_standard_error(self.calibration, before_volts_se)
+        after = propagated_standard_error(self.calibration, after_volts_se)
+        for index, name in enumerate(BODY_LOAD_NAMES):
+            columns[f"{name}_tare_before_se"] = float(before[index])
+            columns[f"{name}_tare_after_se"] = float(after[index])
+        return columns
 
     def gauge_and_hall_volts(self) -> tuple[np.ndarray, np.ndarray]:
         """Raw gauge voltages (n, 6) and Hall line (n,) of the point, V; a record with lost samples is refused
@@ -217,6 +260,44 @@ def _refuse_flagged(point: _RecordedPoint) -> None:
     )
 
 
+def _tare_key(point: _RecordedPoint) -> tuple[bool, float]:
+    """Tail state and pitch: a tare serves measurements with the same weight and gravity direction."""
+    return bool(point.row["tail_attached"]), round(float(point.row["pitch_rad"]), 9)
+
+
+def _tare_record(tare: RecordedTare) -> SetPointRecord:
+    assert tare.record is not None  # tares read from a recording always carry their record
+    return tare.record
+
+
+def _recorded_tare(point: _RecordedPoint, clock: RunningClock) -> RecordedTare:
+    frame = point.recording.set_point_frame(int(point.row["set_point_index"]))
+    volts, volts_standard_error = tare_volts_and_error(
+        frame[list(GAUGE_CHANNELS)].to_numpy(dtype=float)
+    )
+    return RecordedTare(
+        tare_id=f"{point.recording.run_id}#{int(point.row['plan_point_index'])}",
+        run_id=point.recording.run_id,
+        running_time=clock.at(middle_sample_index(point.record)),
+        volts=volts,
+        volts_standard_error=volts_standard_error,
+        record=point.record,
+    )
+
+
+def _next_tare_in_run(
+    points: list[_RecordedPoint], position: int, key: tuple[bool, float]
+) -> _RecordedPoint | None:
+    """The first tare with ``key`` after ``points[position]`` in the same run, or None."""
+    run_id = points[position].recording.run_id
+    for later in points[position + 1 :]:
+        if later.recording.run_id != run_id:
+            return None
+        if later.row["kind"] == "tare" and _tare_key(later) == key:
+            return later
+    return None
+
+
 def measured_set_points(
     run_directories: Iterable[Path | str], keep_saturated: bool = False
 ) -> list[MeasuredSetPoint]:
@@ -237,37 +318,49 @@ def measured_set_points(
         ``keep_saturated``) a measurement or tare has saturated or over-range samples.
     """
     points = _recorded_points(Path(directory) for directory in run_directories)
-    tares: dict[tuple[bool, float], tuple[np.ndarray, np.ndarray, str, SetPointRecord]] = {}
+    tares: dict[tuple[bool, float], RecordedTare] = {}
     calibrations: dict[str, AtiCalibration] = {}
+    clocks: dict[str, RunningClock] = {}
     measured = []
-    for point in points:
+    for position, point in enumerate(points):
         row = point.row
-        tailed = bool(row["tail_attached"])
-        pitch_key = round(float(row["pitch_rad"]), 9)
+        key = _tare_key(point)
         if point.record.is_flagged and not keep_saturated:
             _refuse_flagged(point)
+        run_id = point.recording.run_id
+        if run_id not in clocks:
+            clocks[run_id] = running_clock_of(point.recording.set_points)
+        clock = clocks[run_id]
         if row["kind"] == "tare":
-            frame = point.recording.set_point_frame(int(row["set_point_index"]))
-            tares[(tailed, pitch_key)] = (
-                *tare_volts_and_error(frame[list(GAUGE_CHANNELS)].to_numpy(dtype=float)),
-                f"{point.recording.run_id}#{int(row['plan_point_index'])}",
-                point.record,
-            )
+            tares[key] = _recorded_tare(point, clock)
             continue
-        tare = tares.get((tailed, pitch_key))
-        if tare is None:
+        before = tares.get(key)
+        if before is None:
             raise UserInputError(
                 f"{point.recording.run_directory}: set point {int(row['plan_point_index'])}",
                 f"no wind-off tare at theta = {math.degrees(row['pitch_rad']):.2f} deg "
-                f"({'tailed' if tailed else 'tailless'}) was recorded before it",
+                f"({'tailed' if key[0] else 'tailless'}) was recorded before it",
             )
-        run_id = point.recording.run_id
+        after = _next_tare_in_run(points, position, key)
+        correction = tare_correction(
+            before,
+            None if after is None else _recorded_tare(after, clock),
+            clock.at(middle_sample_index(point.record)),
+            run_id,
+        )
         if run_id not in calibrations:
             calibrations[run_id] = balance_calibration_of(point.recording)
-        flags = {**_flag_counts(point.record), **_flag_counts(tare[3], "tare_")}
+        flags = {**_flag_counts(point.record), **_flag_counts(_tare_record(before), "tare_")}
         measured.append(
             MeasuredSetPoint(
-                point.recording, row, tare[0], tare[1], calibrations[run_id], tare[2], flags
+                point.recording,
+                row,
+                correction.volts,
+                correction.volts_standard_error,
+                calibrations[run_id],
+                before.tare_id,
+                flags,
+                correction,
             )
         )
     return measured
@@ -307,15 +400,18 @@ def table_of_points(
     """One row per measured set point, in the order given.
 
     Columns: ``run_id``, ``tail_id``, ``x_h_mm``, ``plan_point_index``, ``sweep``, ``tailed``, ``repeat``,
-    ``theta_deg``, ``v_m_s``, ``f_set_hz``, ``tare_id`` (``<run id>#<plan point index>`` of the tare used),
+    ``theta_deg``, ``v_m_s``, ``f_set_hz``, ``tare_id`` (``<run id>#<plan point index>`` of the tare before),
+    ``tare_after_id`` and ``tare_after_weight`` (the bracketing tare after the point and its weight lambda in the
+    interpolated zero; ``""`` and 0 without one), ``drift_model`` (how the drift between tares was treated),
     ``f_hall_hz``, ``cycles``, ``rejected_cycles``, ``saturated_samples``, ``over_range_samples``,
     ``tare_saturated_samples``, ``tare_over_range_samples`` (rows of the record and of its tare flagged at the
     ADC limit / over the rated load; -1: not checked), the flapping
     frequency cross-check ``motor_rpm``, ``f_motor_hz`` (= rpm / 60 / 21.33), ``f_disagreement`` ((Hall - motor) /
     motor) and ``f_disagrees`` (beyond 2 %), and for each body load of
     :data:`~ornitail.balance.point_loads.BODY_LOAD_NAMES` its mean, ``_2sigma`` (2 sigma over cycles), ``_se``
-    (standard error of the mean over cycles) and ``_tare_se`` (standard error of the subtracted tare). Loads are
-    in N and N m, body frame, about the rig's reference point.
+    (standard error of the mean over cycles), ``_tare_se`` (standard error of the subtracted zero) and
+    ``_tare_before_se``, ``_tare_after_se`` (of each tare, unweighted: for the covariance of points sharing one).
+    Loads are in N and N m, body frame, about the rig's reference point.
 
     ``on_point(done, total)`` is called after each point (progress display).
 
@@ -343,6 +439,7 @@ def table_of_points(
                 "v_m_s": float(row["tunnel_velocity_m_s"]),
                 "f_set_hz": float(row["flapping_frequency_hz"]),
                 "tare_id": point.tare_id,
+                **point.tare_columns(),
                 **{name: point.flags.get(name, -1) for name in SATURATION_COLUMNS},
                 **loads.as_record(),
                 **frequency_cross_check_record(

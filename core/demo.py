@@ -10,6 +10,7 @@ Finally it flies a small simulated campaign, fits trends against tail geometry a
 
 from __future__ import annotations
 
+import math
 import sys
 from importlib.resources import as_file, files
 from pathlib import Path
@@ -19,7 +20,7 @@ import click
 import pandas as pd
 
 from ornitail.acquisition.catalog import default_data_root
-from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE
+from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, read_rig_file
 from ornitail.acquisition.sweep_cli import (
     check_time_scale_option,
     exit_code_of,
@@ -33,6 +34,8 @@ from ornitail.balance.sweep_table import tail_contribution
 from ornitail.core.demo_design import design_from_simulated_campaign
 from ornitail.core.output import emit, json_option
 from ornitail.design.propose_cli import render_proposal
+from ornitail.sim.configuration import study_configuration
+from ornitail.sim.tunnel_truth import LOAD_KEYS, tunnel_truth
 
 DEMO_TIME_SCALE = 4.0
 """The simulated rig runs this many times faster than real time in the demo (the DAQ then streams 40 k
@@ -40,6 +43,92 @@ samples/s of wall time through a pty, which two cores sustain)."""
 
 _PRINTED_LOADS = ("x_n", "z_n", "m_n_m")
 _UNITS = {"x_n": "N", "z_n": "N", "m_n_m": "N m"}
+AGREEMENT_SIGMAS = 2.0
+"""An estimate agrees with the simulator's truth when it lies within this many of its own sigmas of it."""
+CHANCE_BEYOND_TWO_SIGMA = 0.0455
+"""Probability that a normal error lies beyond 2 of its sigmas."""
+
+
+def _compared(estimate: float, sigma: float, truth: float, unit: str) -> dict[str, Any]:
+    error_in_sigmas = (estimate - truth) / sigma if sigma > 0 else math.inf
+    return {
+        "unit": unit,
+        "estimate": estimate,
+        "sigma": sigma,
+        "truth": truth,
+        "error_in_sigmas": error_in_sigmas,
+        "agrees": bool(abs(error_in_sigmas) <= AGREEMENT_SIGMAS),
+    }
+
+
+def truth_comparison(
+    table: pd.DataFrame,
+    contribution: dict[str, Any],
+    derivatives: dict[str, Any],
+    steady_state: dict[str, float],
+) -> dict[str, dict[str, Any]]:
+    """The demo's tail contribution, steady-state loads (X0, Z0, M0) and derivatives against the simulator's
+    truth for the same configuration and point (:func:`ornitail.sim.tunnel_truth.tunnel_truth`, the simulated
+    rig's reference point); each entry with the error in the estimate's own sigmas."""
+    configuration = study_configuration(
+        str(table["tail_id"].iloc[0]), float(table["x_h_mm"].iloc[0])
+    )
+    transform = read_rig_file(DEFAULT_RIG_FILE).tool_transform
+    tail_point = (
+        math.radians(contribution["theta_deg"]),
+        contribution["v_m_s"],
+        contribution["f_set_hz"],
+    )
+    with_tail, without = (
+        tunnel_truth(configuration, *tail_point, tail_attached=state, reference_transform=transform)
+        for state in (True, False)
+    )
+    compared = {
+        f"tail_{load}": _compared(
+            contribution[key],
+            contribution[f"{key}_sigma"],
+            with_tail.loads[key] - without.loads[key],
+            unit,
+        )
+        for load, key, unit in LOAD_KEYS
+    }
+    steady = tunnel_truth(
+        configuration,
+        math.radians(steady_state["theta_deg"]),
+        steady_state["v_m_s"],
+        steady_state["f_hz"],
+        reference_transform=transform,
+    )
+    truths = {f"{load}0": steady.loads[key] for load, key, _ in LOAD_KEYS} | steady.derivatives
+    for name, truth in truths.items():
+        entry = derivatives.get(name)
+        if isinstance(entry, dict) and "value" in entry:
+            compared[name] = _compared(entry["value"], entry["sigma"], truth, entry.get("unit", ""))
+    return compared
+
+
+def _truth_lines(comparison: dict[str, dict[str, Any]]) -> list[str]:
+    lines = [
+        "",
+        f"Against the simulator's truth (`ornitail sim tunnel`; agrees = within {AGREEMENT_SIGMAS:g} of its own "
+        "sigmas):",
+    ]
+    lines.append(f"  {'':22s}{'estimate':>12s}{'1 sigma':>10s}{'truth':>12s}{'error/sigma':>13s}")
+    for name, entry in comparison.items():
+        label = f"{name.replace('tail_', 'tail ')} [{entry['unit']}]"
+        verdict = "agrees" if entry["agrees"] else "DISAGREES"
+        lines.append(
+            f"  {label:22s}{entry['estimate']:>+12.4g}{entry['sigma']:>10.2g}{entry['truth']:>+12.4g}"
+            f"{entry['error_in_sigmas']:>+13.1f}  {verdict}"
+        )
+    disagreeing = [name for name, entry in comparison.items() if not entry["agrees"]]
+    expected = len(comparison) * CHANCE_BEYOND_TWO_SIGMA
+    lines.append(
+        f"  {len(disagreeing)} of {len(comparison)} lie beyond {AGREEMENT_SIGMAS:g} of their sigmas from the truth"
+        + (f" ({', '.join(disagreeing)})" if disagreeing else "")
+        + f"; about {expected:.1f} would by chance if every interval were honest"
+    )
+    return lines
 
 
 def _steady_state_summary(table: pd.DataFrame) -> dict[str, Any]:
@@ -98,6 +187,8 @@ def _render(result: dict[str, Any]) -> str:
                 lines.append(
                     f"  {name:3s} {entry['value']:+.4g} +- {entry['sigma']:.2g} {entry.get('unit', '')}"
                 )
+    if result.get("truth"):
+        lines += _truth_lines(result["truth"])
     if result.get("processed_folder"):
         lines.append(f"\nTables and plots: {result['processed_folder']}")
     design = result.get("design")
@@ -150,6 +241,13 @@ def demo_command(data_root: Path | None, time_scale: float, as_json: bool) -> No
             result["tail_contribution"] = contribution.iloc[0].to_dict()
         derivatives = processed["configurations"][0].get("derivatives", {})
         result["derivatives"] = derivatives.get("derivatives", {})
+        if "tail_contribution" in result and "steady_state" in derivatives:
+            result["truth"] = truth_comparison(
+                table,
+                result["tail_contribution"],
+                result["derivatives"],
+                derivatives["steady_state"],
+            )
         result["table_csv"] = processed["table_csv"]
         result["processed_folder"] = str(folder)
         tunnel_derivatives = sorted(folder.glob("*-derivatives.json"))

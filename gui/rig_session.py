@@ -40,6 +40,8 @@ from ornitail.gui.sweep_runner import SweepRunner
 
 WIND_OFF_TIMEOUT_S = 60.0
 """Rig time the fan and motor get to come to rest before a tare."""
+SHUTDOWN_TIMEOUT_S = 60.0
+"""Wall time the window waits for the disconnect (sweep aborted, streams stopped, rig closed) when closing, s."""
 
 
 @dataclass(frozen=True)
@@ -179,9 +181,18 @@ class RigSession:
             self.post("info", "rig disconnected, motor and fan off")
 
     def shutdown(self) -> None:
-        """Disconnect and end the command thread (window closing)."""
-        self.disconnect().result(timeout=60.0)
-        self._worker.shutdown(wait=True)
+        """Disconnect and end the command thread (window closing).
+
+        A command thread stuck behind an instrument that never answers does not keep the window open: after
+        ``SHUTDOWN_TIMEOUT_S`` the rig is brought to its safe state from here and the thread is left behind.
+        """
+        try:
+            self.disconnect().result(timeout=SHUTDOWN_TIMEOUT_S)
+        except TimeoutError:
+            rig = self.rig
+            if rig is not None:
+                rig.safe_state()
+        self._worker.shutdown(wait=False, cancel_futures=True)
 
     # -- set points -------------------------------------------------------------------------
     def set_pitch_deg(self, pitch_deg: float) -> Future:

@@ -166,7 +166,10 @@ class RunsTab(QtWidgets.QWidget):
         rows = []
         for configuration in result["configurations"]:
             lines.append(f"configuration {configuration['configuration']}")
-            lines += [f"  {text}" for text in configuration.get("tail_statements", [])]
+            statements = [configuration.get("drift_statement", "")] + configuration.get(
+                "tail_statements", []
+            )
+            lines += [f"  {text}" for text in statements if text]
             rows += derivative_rows(configuration)
         self.details.setPlainText("\n".join(lines))
         self.derivatives.setRowCount(len(rows))

@@ -15,6 +15,7 @@ from ornitail.sim.configuration import study_configuration
 from ornitail.sim.dynamics import TrimNotFoundError, linearise
 from ornitail.sim.effects import EffectSet
 from ornitail.sim.free_flight import FlightPlan, simulate_flight, write_flight_log_csv
+from ornitail.sim.tunnel_truth import tunnel_truth
 
 MAX_SEED = 2**32 - 1
 """Largest random seed accepted (seeds are 0..2**32 - 1)."""
@@ -113,3 +114,96 @@ def flight_command(
     write_flight_log_csv(log, out)
     result = {"path": str(out), "rows": len(log), "columns": list(log.columns), "seed": seed}
     emit(result, as_json, lambda r: f"wrote {r['rows']} rows to {r['path']}")
+
+
+TUNNEL_POINT_RANGES = {
+    "--theta-deg": (-90.0, 90.0, "deg"),
+    "--v-m-s": (0.0, 10.0, "m/s"),
+    "--f-hz": (0.0, 30.0, "Hz"),
+    "--day": (0, 10_000, "days"),
+}
+"""Accepted operating points of ``sim tunnel``: pitch, tunnel speed, flapping frequency, day of the drift."""
+
+
+def _check_tunnel_point(**values: float) -> None:
+    for option, value in values.items():
+        low, high, unit = TUNNEL_POINT_RANGES[option]
+        if not (math.isfinite(value) and low <= value <= high):
+            raise UserInputError(option, f"value {value!r} is outside {low:g}..{high:g} {unit}")
+
+
+def _render_tunnel_truth(result: dict[str, Any]) -> str:
+    point = result["operating_point"]
+    state = "with tail" if result["tail_attached"] else "tailless"
+    loads = result["loads"]
+    transform = ", ".join(f"{value:g}" for value in result["reference_point_tool_transform_mm_deg"])
+    lines = [
+        f"{result['configuration']} {state} at theta {point['theta_deg']:.2f} deg, V {point['v_m_s']:.3f} m/s, "
+        f"f {point['f_hz']:.2f} Hz: the simulator's truth",
+        f"({result['effects']}), about the rig's reference point (tool transform [{transform}] mm, deg),",
+        f"{result['frame']}:",
+        f"  X {loads['x_n']:+.5f} N   Z {loads['z_n']:+.5f} N   M {loads['m_n_m']:+.6f} N m",
+        "derivatives:",
+    ]
+    lines += [
+        f"  {name:3s} {entry['value']:+.4e} {entry['unit']}"
+        for name, entry in result["derivatives"].items()
+    ]
+    return "\n".join(lines)
+
+
+@sim_group.command("tunnel")
+@click.option("--tail", required=True, help="Study tail name, e.g. S3, AR1, T2.")
+@click.option(
+    "--x-h-mm", type=float, default=98.0, show_default=True, help="Tail position x_h in mm."
+)
+@click.option("--theta-deg", type=float, required=True, help="Pitch angle theta, degrees.")
+@click.option("--v-m-s", type=float, required=True, help="Tunnel speed V, m/s.")
+@click.option("--f-hz", type=float, required=True, help="Flapping frequency f, Hz.")
+@click.option("--tailless", is_flag=True, help="The vehicle with its tail removed.")
+@click.option(
+    "--day",
+    type=int,
+    default=0,
+    show_default=True,
+    help="Day of the day-to-day drift effect (the simulated rig flies day 0).",
+)
+@click.option(
+    "--rig",
+    "rig_path",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Rig file whose tool transform sets the reference point [default: the simulated rig].",
+)
+@json_option
+def tunnel_command(
+    tail: str,
+    x_h_mm: float,
+    theta_deg: float,
+    v_m_s: float,
+    f_hz: float,
+    tailless: bool,
+    day: int,
+    rig_path: Path | None,
+    as_json: bool,
+) -> None:
+    """The simulator's truth at a tunnel point: the cycle-averaged loads about the rig's reference point and the
+    tunnel derivatives that `ornitail process` estimates (effects on the air and the vehicle, none of the
+    sensor's). Compare them with a processed sweep of the simulated rig."""
+    from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, read_rig_file
+
+    _check_tunnel_point(
+        **{"--theta-deg": theta_deg, "--v-m-s": v_m_s, "--f-hz": f_hz, "--day": day}
+    )
+    configuration = study_configuration(tail, x_h_mm)
+    rig = read_rig_file(rig_path or DEFAULT_RIG_FILE)
+    truth = tunnel_truth(
+        configuration,
+        math.radians(theta_deg),
+        v_m_s,
+        f_hz,
+        tail_attached=not tailless,
+        effects=EffectSet().replace_effect("day_to_day_drift", day=day),
+        reference_transform=rig.tool_transform,
+    )
+    emit(truth.to_json_dict(), as_json, _render_tunnel_truth)

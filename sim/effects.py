@@ -124,13 +124,21 @@ class DayToDayDrift:
 
 @dataclass(frozen=True)
 class BalanceResolution:
-    """Tunnel: Nano-17 noise at its resolution and 16-bit quantisation of the gauge voltages."""
+    """Tunnel: Nano-17 noise at its resolution and 16-bit quantisation of the gauge voltages.
+
+    ``quantise`` says whether the gauge voltages are digitised here (a standalone recording, whose ADC this is).
+    A simulated acquisition board that digitises them itself (the ORNI-DAQ9 and NETCANOEM simulators) sets it
+    False: a signal quantised twice on two slightly different grids (20 V / 2^16 here, 20.48 V / 2^16 on the
+    boards) keeps a rounding error of up to half a step that the noise does not average out when the signal is
+    static, as in a wind-off tare (about 2 mN in X).
+    """
 
     enabled: bool = True
     force_noise_n: float = 1.46e-3  # study: 0.149 gram-force
     torque_noise_n_m: float = 1.56e-5  # estimate: Nano-17 SI-50-0.5 torque resolution 1/64 N mm
     daq_bits: int = 16
     daq_range_v: float = 10.0
+    quantise: bool = True
 
 
 @dataclass(frozen=True)

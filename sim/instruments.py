@@ -132,7 +132,7 @@ class BalanceGauges:
             loads = loads + generator.standard_normal(loads.shape) * self._noise_sigma
         volts = loads @ self.inverse.T + self.bias_v
         volts = volts + self.sensor_warming_k(motor_on_time_s)[:, None] * self.drift_v_per_k
-        if self.resolution.enabled:
+        if self.resolution.enabled and self.resolution.quantise:
             step = 2 * self.resolution.daq_range_v / 2**self.resolution.daq_bits
             volts = np.clip(
                 np.round(volts / step) * step,

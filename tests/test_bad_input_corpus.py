@@ -202,6 +202,11 @@ FILE_SLOTS: dict[str, tuple[str, tuple[str, ...]]] = {
         ),
     ),
     "gui-rig": (".toml", ("gui", "--rig", "{f}")),
+    "sim-tunnel-rig": (
+        ".toml",
+        ("sim", "tunnel", "--tail", "S3", "--theta-deg", "25", "--v-m-s", "0.8", "--f-hz", "13.5")
+        + ("--rig", "{f}"),
+    ),
 }
 for slot, (suffix, template) in FILE_SLOTS.items():
     for kind in FILE_KINDS:
@@ -1490,6 +1495,58 @@ for parent in UNWRITABLE_PARENTS:
         expect=parent.replace("{ws}/", ""),
     )
 case("sim", "trim-ok", "sim", "trim", "--tail", "S3", "--json", valid=True)
+TUNNEL_POINT = {"--theta-deg": "25", "--v-m-s": "0.8", "--f-hz": "13.5"}
+for option in (*TUNNEL_POINT, "--x-h-mm"):
+    for value in ("nan", "1e309", "-inf", "1e308", "abc"):
+        options = {**TUNNEL_POINT, option: value}
+        case(
+            "sim",
+            f"tunnel{option}-{value}",
+            "sim",
+            "tunnel",
+            "--tail",
+            "S3",
+            *(item for pair in options.items() for item in pair),
+            expect=option,
+        )
+for option, value in (
+    ("--v-m-s", "-0.1"),
+    ("--f-hz", "31"),
+    ("--theta-deg", "95"),
+    ("--day", "-1"),
+):
+    options = {**TUNNEL_POINT, option: value}
+    case(
+        "sim",
+        f"tunnel-out-of-range{option}",
+        "sim",
+        "tunnel",
+        "--tail",
+        "S3",
+        *(item for pair in options.items() for item in pair),
+        expect=option,
+    )
+case(
+    "sim",
+    "tunnel-tail-unknown",
+    "sim",
+    "tunnel",
+    "--tail",
+    "Q9",
+    *(item for pair in TUNNEL_POINT.items() for item in pair),
+    expect="Q9",
+)
+case(
+    "sim",
+    "tunnel-ok",
+    "sim",
+    "tunnel",
+    "--tail",
+    "S3",
+    *(item for pair in TUNNEL_POINT.items() for item in pair),
+    "--json",
+    valid=True,
+)
 
 # -- 9. gap ------------------------------------------------------------------------------------------
 GAP_MODELS = {

@@ -26,13 +26,18 @@ def test_demo_records_the_study_protocol_and_prints_cycle_averaged_loads(tmp_pat
     assert completed.returncode == 0, completed.stderr
     result = json.loads(completed.stdout)
     assert result["sweep"]["status"] == "completed"
-    assert result["sweep"]["completed_points"] == 24
+    assert result["sweep"]["completed_points"] == 33
     steady = result["steady_state"]
     # Three 2 s records of ~27 flaps at 13.5 Hz each; a partial cycle is lost at each end of a record.
     assert steady["tailed"]["cycles"] >= 72 and steady["tailless"]["cycles"] >= 72
     assert abs(steady["tailed"]["f_hall_hz"] - 13.5) < 0.1
     table = pd.read_csv(result["table_csv"])
-    assert len(table) == 18  # 24 set points minus 6 tares
+    assert (
+        len(table) == 18
+    )  # 33 set points minus 15 tares (before each pitch's points, after each block)
+    assert (
+        table["drift_model"] == "linear in running time (motor on) between bracketing tares"
+    ).all()
     # The simulated vehicle's own truth at the steady state (tunnel environment, the rig's default effects).
     configuration = study_configuration("S3", 98.0)
     truth = {
@@ -41,11 +46,24 @@ def test_demo_records_the_study_protocol_and_prints_cycle_averaged_loads(tmp_pat
     }
     contribution = result["tail_contribution"]
     true_tail_x_n = truth[True].aero_x_n - truth[False].aero_x_n
-    # The motor-off tares cannot remove the balance's thermal drift while the motor runs (a simulated sensor
-    # effect: 3 K warm-up, 2 mV/K per gauge), which shifts forces by a few mN over a sweep; 5 mN bounds it here.
-    assert abs(contribution["x_n"] - true_tail_x_n) < 5e-3
-    assert abs(steady["tailed"]["z_n"] - truth[True].aero_z_n) < 5e-3
+    # The balance's thermal drift while the motor runs (3 K warm-up, 2 mV/K per gauge: ~14 mN in X over the
+    # steady-state block) is measured by the tares before and after each block and interpolated out; what is left
+    # (the warm-up's curvature, ~0.5 mN) is common to tailed and tailless and cancels in the tail's contribution.
+    assert abs(steady["tailed"]["z_n"] - truth[True].aero_z_n) < 2e-3
     assert contribution["x_n_resolvable"] is True
+    # Beside each result, its distance to the simulator's truth (`ornitail sim tunnel`) in its own sigmas.
+    compared = result["truth"]
+    assert compared["tail_X"]["truth"] == pytest.approx(true_tail_x_n, rel=1e-9)
+    assert compared["Z0"]["truth"] == pytest.approx(truth[True].aero_z_n, rel=1e-9)
+    assert {"Xu", "Zu", "Mu", "Xw", "Zw", "Mw"} <= set(compared)
+    for entry in compared.values():
+        error = (entry["estimate"] - entry["truth"]) / entry["sigma"]
+        assert entry["error_in_sigmas"] == pytest.approx(error)
+        assert entry["agrees"] is bool(abs(error) <= 2.0)
+    # The tail's contribution within 4 of its sigmas of the truth (a 6e-5 chance per load of failing if the sigmas
+    # are honest; 2 sigma would fail one run in seven over three loads).
+    for load in ("X", "Z", "M"):
+        assert abs(compared[f"tail_{load}"]["error_in_sigmas"]) < 4.0, compared[f"tail_{load}"]
 
     # The last stage: a tail proposed from the simulated flight campaign and the tunnel derivatives.
     design = result["design"]

@@ -59,6 +59,25 @@ def test_stream_is_the_simulator_signal_sample_for_sample(daq_driver):
     assert (stats.crc_failures, stats.garbage_bytes, stats.lost_samples) == (0, 0, 0)
 
 
+def test_a_wind_off_signal_is_digitised_once_and_its_mean_is_unbiased(
+    daq_driver, simulated_tunnel_signals
+):
+    """Motor and fan off: a static signal plus the balance's noise, as in a wind-off tare. The board is the ADC
+    (0.3125 mV steps); the simulator hands it analog volts. The mean of 20 000 samples equals the simulator's
+    analog mean (gauge bias plus the weight through the inverse calibration) to within 0.02 mV: the noise (~0.2 mV
+    per sample, below one step) leaves a standard error of ~2 uV, and one rounding with that dither is unbiased to
+    far below it. A signal quantised twice, on the simulator's 20 V / 2^16 grid and then the board's 20.48 V / 2^16,
+    keeps up to half a step (0.16 mV) of rounding error here, which the noise cannot average out."""
+    source = simulated_tunnel_signals._source
+    gauges = source.gauges
+    expected = gauges.inverse @ source.true_cycle_average.sensor_loads + gauges.bias_v
+    daq_driver.set_sample_rate(10_000)
+    daq_driver.start()
+    _, volts = collect(daq_driver, 20_000)
+    daq_driver.stop()
+    np.testing.assert_allclose(volts[:, :6].mean(axis=0), expected, atol=2e-5)
+
+
 def test_rate_above_link_ceiling_is_refused_before_sending(daq_driver):
     with pytest.raises(UserInputError, match="16000"):
         daq_driver.set_sample_rate(20_000)

@@ -138,6 +138,24 @@ def test_stop_request_finishes_the_point_and_resume_completes_the_rest(simulated
     assert again.completed_points == 7 and "nothing to do" in again.message
 
 
+def test_abort_drops_the_point_in_progress_and_leaves_the_rig_safe(simulated_rig, tmp_path):
+    plan = short_plan()
+    stop = SweepStop()
+
+    def on_event(event):  # abort while the third point settles: it is never journalled
+        if event.stage == "moving" and event.completed == 2:
+            stop.abort()
+
+    result = run_sweep(plan, simulated_rig, tmp_path, stop=stop, on_event=on_event)
+    assert (result.status, result.completed_points) == ("aborted", 2)
+    assert "aborted by the operator" in result.message
+    run = load_recording(result.run_directories[0])
+    assert run.status == "aborted"
+    assert sorted(int(i) for i in run.set_points_frame()["plan_point_index"]) == [0, 1]
+    assert simulated_rig.fan.read_target_rpm() == 0.0
+    assert motor_spins_down(simulated_rig)
+
+
 def test_unplugged_fan_fails_the_run_naming_it_and_keeps_what_was_recorded(simulated_rig, tmp_path):
     plan = short_plan()
 

@@ -1,137 +1,18 @@
-"""Sweeps processed straight from the simulator's signals (no real-time rig), and the simulator's own truth.
+"""Sweeps processed straight from the simulator's signals (no real-time rig), and the simulator's own truth: the
+:class:`SimulatedSweep` of ``benchmarks/tunnel_coverage.py`` (one home for both)."""
 
-A sweep here is one continuous :class:`TunnelSignalSource` visiting the set points of a plan in the plan's
-order (wind-off tare at each pitch, then that pitch's measurements), so effects that accumulate over a sweep
-(the balance warming while the motor runs) accumulate as on the rig. Each record goes through the same
-functions as ``ornitail process`` (:func:`tare_volts_and_error`, :func:`cycle_averaged_loads`).
-"""
+import importlib.util
+import sys
+from pathlib import Path
 
-import math
-from dataclasses import dataclass
-from importlib.resources import files
-
-import numpy as np
-import pandas as pd
 import pytest
 
-from ornitail.acquisition.sweep_plan import SweepPlan, load_plan
-from ornitail.balance.point_loads import cycle_averaged_loads, tare_volts_and_error
-from ornitail.calibration.ati_calibration import AtiCalibration
-from ornitail.calibration.tool_transform import ToolTransform
-from ornitail.sim.configuration import study_configuration
-from ornitail.sim.tunnel import TunnelSignalSource, true_cycle_average
-
-CALIBRATION_PATH = files("ornitail.calibration") / "data" / "FT8884.cal"
-SHIPPED_PLAN_PATH = files("ornitail.acquisition") / "data" / "study_tunnel_plan.toml"
-SAMPLE_RATE_HZ = 10_000.0
-SETTLE_SAMPLES = 1_000  # 0.1 s after each change, discarded (the rig waits for settling too)
-
-
-@dataclass(frozen=True)
-class SimulatedSweep:
-    """Plan, configuration, effects and the calibration whose tool transform puts the loads at the tailed CG."""
-
-    plan: SweepPlan
-    configuration: object
-    effects: object
-    calibration: AtiCalibration
-    reference_station_m: float
-
-    def table(self, seed: int, record_s: float | None = None) -> pd.DataFrame:
-        """The cycle-averaged table of one simulated sweep (columns as ``cycle_averaged_table``)."""
-        source = TunnelSignalSource(self.configuration, self.effects, seed=seed)
-        record_samples = int(round((record_s or self.plan.record_s) * SAMPLE_RATE_HZ))
-        tares = {}
-        rows = []
-        for point in self.plan.set_points:
-            source.set_operating_point(
-                pitch_rad=point.pitch_rad,
-                tunnel_velocity_m_s=point.tunnel_velocity_m_s,
-                flapping_frequency_hz=point.flapping_frequency_hz,
-                tail_attached=point.tail_attached,
-            )
-            source.next_block(SETTLE_SAMPLES)
-            block = source.next_block(record_samples)
-            key = (point.tail_attached, point.pitch_rad)
-            if point.kind == "tare":
-                tares[key] = tare_volts_and_error(block[:, :6])
-                continue
-            tare_volts, tare_error = tares[key]
-            loads = cycle_averaged_loads(
-                block[:, :6],
-                block[:, 8],
-                SAMPLE_RATE_HZ,
-                tare_volts,
-                self.calibration,
-                tare_volts_standard_error=tare_error,
-            )
-            rows.append(
-                {
-                    "tail_id": self.plan.tail_id,
-                    "x_h_mm": 1000 * self.plan.x_h_m,
-                    "sweep": point.sweep,
-                    "tailed": point.tail_attached,
-                    "repeat": point.repeat,
-                    "theta_deg": math.degrees(point.pitch_rad),
-                    "v_m_s": point.tunnel_velocity_m_s,
-                    "f_set_hz": point.flapping_frequency_hz,
-                    "tare_id": f"{point.tail_attached}@{point.pitch_rad:.6f}",
-                    **loads.as_record(),
-                }
-            )
-        return pd.DataFrame(rows)
-
-    def truth(self, pitch_rad, velocity_m_s, frequency_hz, tailed=True) -> np.ndarray:
-        """True cycle-averaged [X, Z, M] (N, N, N m) about the reference point (the tailed CG)."""
-        point = true_cycle_average(
-            self.configuration, self.effects, pitch_rad, velocity_m_s, frequency_hz, tailed
-        )
-        # Moment about the reference point on the fuselage axis: M_ref = M_cg + (z_cg - z_ref) X.
-        moment = point.aero_m_n_m + (point.cg_station_m - self.reference_station_m) * point.aero_x_n
-        return np.array([point.aero_x_n, point.aero_z_n, moment])
-
-    def true_derivatives(self, step=1e-4) -> dict[str, float]:
-        """Central finite differences of the truth in u, w (through V and theta) and f at the steady state."""
-        plan = self.plan
-        u0 = -plan.velocity0_m_s * math.cos(plan.theta0_rad)
-        w0 = -plan.velocity0_m_s * math.sin(plan.theta0_rad)
-
-        def at(u, w, f):
-            return self.truth(math.atan2(-w, -u), math.hypot(u, w), f)
-
-        f0 = plan.frequency0_hz
-        slopes = {
-            "u": (at(u0 + step, w0, f0) - at(u0 - step, w0, f0)) / (2 * step),
-            "w": (at(u0, w0 + step, f0) - at(u0, w0 - step, f0)) / (2 * step),
-            "f": (at(u0, w0, f0 + step) - at(u0, w0, f0 - step)) / (2 * step),
-        }
-        steady = at(u0, w0, f0)
-        result = {f"{load}0": float(steady[index]) for index, load in enumerate("XZM")}
-        for variable, slope in slopes.items():
-            for index, load in enumerate("XZM"):
-                result[load + variable] = float(slope[index])
-        return result
-
-
-def simulated_sweep(plan=None, effects=None, tail_id="S3", x_h_mm=98.0) -> SimulatedSweep:
-    """A :class:`SimulatedSweep` of ``plan`` (default: the shipped study plan) on the simulator."""
-    plan = plan or load_plan(SHIPPED_PLAN_PATH)
-    configuration = study_configuration(tail_id, x_h_mm)
-    reference = true_cycle_average(configuration, effects, plan.theta0_rad, 0.0, 0.0, True)
-    mounting = configuration.mounting
-    reference_from_sensor_body = np.array(
-        [
-            -mounting.sensor_origin_x_m,
-            0.0,
-            reference.cg_station_m - mounting.sensor_origin_station_m,
-        ]
-    )
-    rotation = mounting.rotation_matrix()  # rows: sensor axes in body axes; a half turn about x
-    transform = ToolTransform.from_si(
-        rotation @ reference_from_sensor_body, np.array([math.pi, 0, 0])
-    )
-    calibration = AtiCalibration.from_file(CALIBRATION_PATH).with_tool_transform(transform)
-    return SimulatedSweep(plan, configuration, effects, calibration, reference.cg_station_m)
+_PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "tunnel_coverage.py"
+_SPEC = importlib.util.spec_from_file_location("ornitail_tunnel_coverage", _PATH)
+tunnel_coverage = importlib.util.module_from_spec(_SPEC)
+sys.modules[_SPEC.name] = tunnel_coverage
+_SPEC.loader.exec_module(tunnel_coverage)
+simulated_sweep = tunnel_coverage.simulated_sweep
 
 
 @pytest.fixture

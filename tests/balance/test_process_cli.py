@@ -71,6 +71,10 @@ def test_process_writes_tables_figures_and_one_json_object(recorded_sweep, cli, 
     assert derivatives["Mq"]["value"] is None  # not measurable clamped
     assert derivatives["Zf"]["value"] < 0  # faster flapping: more thrust along -z_b
     assert configuration["tail_contribution"][0]["x_n"] > 0  # the tail adds drag along +x_b
+    # This plan takes one tare per pitch: the drift after it is not corrected, and the output says so.
+    assert configuration["drift_statement"].startswith(
+        "Balance drift NOT corrected for 5 of 5 points"
+    )
     written = [Path(path) for path in record["written"]]
     suffixes = sorted(path.suffix for path in written)
     assert suffixes.count(".png") == suffixes.count(".pdf") == 3
