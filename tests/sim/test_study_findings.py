@@ -158,8 +158,8 @@ def test_mu_is_set_by_x_h_and_xq_peaks_near_98mm() -> None:
 @pytest.mark.xfail(
     strict=True,
     reason="|Mq| of S3 grows x1.9 from 57 to 126 mm: the quasi-steady tail damping scales with "
-    "the squared tail arm (+74 %), which the wake's decay and narrowing offset only in part "
-    "(docs/simulator.md, Findings of the study)",
+    "the tail arm times (arm + wake lag length), which the wake's decay and narrowing offset only "
+    "in part; even a 0.1 m wake decay leaves x1.5 (docs/simulator.md, Findings of the study)",
 )
 def test_mq_hardly_depends_on_x_h() -> None:
     mq = [abs(model("S3", x_h_mm).derivatives["Mq"]) for x_h_mm in POSITIONS_MM]
