@@ -7,8 +7,12 @@
    manoeuvres and scored on the withheld ones (:mod:`ornitail.gap.ranking`).
 4. How far: gap before and after the chosen effect per channel on the withheld manoeuvres.
 
-Residuals are normalised per channel by the measured signal's standard deviation on the training
-manoeuvres, so q, u, w and theta weigh alike.
+Fits, ranking and the gap before and after are weighted per channel by the inverse of the noise
+level: the standard deviation of the part of the baseline's training residual that does not repeat
+from manoeuvre to manoeuvre (gusts, sensor noise; :func:`unlocked_residual_sd`). A channel the input
+hardly moves (its residual mostly disturbance) then weighs less than one whose residual an effect
+can explain, as an output-error fit weighs channels by their noise covariance. ``where`` and the
+``unexplained`` verdict keep the measured signal's standard deviation as the unit.
 """
 
 from __future__ import annotations
@@ -26,7 +30,11 @@ from ornitail.gap.flight_candidates import (
     flight_candidates,
 )
 from ornitail.gap.flight_data import CHANNELS, FlightRun, read_flight_runs, split_runs
-from ornitail.gap.flight_localisation import localise_flight, sparse_pointer
+from ornitail.gap.flight_localisation import (
+    localise_flight,
+    sparse_pointer,
+    unlocked_residual_sd,
+)
 from ornitail.gap.flight_model import LinearFlightModel, simulate_runs, superpose
 from ornitail.gap.magnitude_fit import fit_magnitude
 from ornitail.gap.model_spec import BaselineSpec
@@ -46,6 +54,17 @@ class FlightDiagnosis:
     baseline: LinearFlightModel
     chosen: LinearFlightModel
     scales: np.ndarray
+
+
+def noise_scales(
+    training: Sequence[FlightRun], residuals: Sequence[np.ndarray], signal_scales: np.ndarray
+) -> np.ndarray:
+    """Per-channel weights' scale (SI units of each channel): the baseline's unlocked residual
+    standard deviation on the training runs, or the signal's standard deviation where that is not
+    positive and finite (fewer than two runs, a channel without noise).
+    """
+    noise = unlocked_residual_sd(training, residuals)
+    return np.where(np.isfinite(noise) & (noise > 0), noise, signal_scales)
 
 
 def residuals_of(model: LinearFlightModel, runs: Sequence[FlightRun]) -> list[np.ndarray]:
@@ -200,8 +219,9 @@ def diagnose_flight(
     training = [runs[i] for i in training_index]
     withheld = [runs[i] for i in withheld_index]
     baseline = baseline_flight_model(spec)
-    scales = np.concatenate([run.states for run in training]).std(axis=0)
-    scales = np.where(scales > 0, scales, 1.0)
+    signal_scales = np.concatenate([run.states for run in training]).std(axis=0)
+    signal_scales = np.where(signal_scales > 0, signal_scales, 1.0)
+    scales = noise_scales(training, residuals_of(baseline, training), signal_scales)
     counts = np.array([len(run.time_s) for run in withheld], dtype=float)
 
     base_withheld_residuals = residuals_of(baseline, withheld)
@@ -218,7 +238,7 @@ def diagnose_flight(
         if rest:
             second, _, _ = _score_library(rest, fitted[top.name][0], baseline, split, first)
     all_residuals = residuals_of(baseline, runs)
-    where = localise_flight(runs, all_residuals, scales, baseline)
+    where = localise_flight(runs, all_residuals, signal_scales, baseline)
     pointer = sparse_pointer(training, residuals_of(baseline, training), baseline)
     chosen_model, chosen_sse = fitted[ranking.entries[0].name]
     report = assemble_report(
@@ -234,6 +254,12 @@ def diagnose_flight(
         where=where,
         pointer=pointer,
         seed=seed,
+        verdict_gap=float(
+            np.sqrt(
+                np.sum(base_withheld * (scales / signal_scales) ** 2)
+                / (counts.sum() * len(CHANNELS))
+            )
+        ),
     )
     report["second_effect"] = _second_effect(second)
-    return FlightDiagnosis(report, runs, withheld_index, baseline, chosen_model, scales)
+    return FlightDiagnosis(report, runs, withheld_index, baseline, chosen_model, signal_scales)

@@ -146,6 +146,16 @@ def localise_flight(
     return where
 
 
+def _aligned_on_input(runs: Sequence[FlightRun], arrays: Sequence[np.ndarray]) -> np.ndarray:
+    """``arrays`` (one (N_i, channels) array per run) aligned at each run's input start on their
+    common span: shape (runs, samples, channels).
+    """
+    offsets = [int(np.searchsorted(run.time_s, run.input_start_s)) for run in runs]
+    before = min(offsets)
+    after = min(len(a) - o for a, o in zip(arrays, offsets, strict=True))
+    return np.array([a[o - before : o + after] for a, o in zip(arrays, offsets, strict=True)])
+
+
 def input_locked_fraction(runs: Sequence[FlightRun], normalised: Sequence[np.ndarray]) -> float:
     """Share of the residual energy that repeats from manoeuvre to manoeuvre (aligned on the
     input): (R - 1/M) / (1 - 1/M) with R = |mean residual|^2 / mean |residual|^2 over M runs.
@@ -153,15 +163,24 @@ def input_locked_fraction(runs: Sequence[FlightRun], normalised: Sequence[np.nda
     Noise and disturbances give about 0 (R ~ 1/M); an error the input drives the same way every
     time gives 1. Runs are aligned at their input start on their common span.
     """
-    offsets = [int(np.searchsorted(run.time_s, run.input_start_s)) for run in runs]
-    before = min(offsets)
-    after = min(len(r) - o for r, o in zip(normalised, offsets, strict=True))
-    aligned = np.array(
-        [r[o - before : o + after] for r, o in zip(normalised, offsets, strict=True)]
-    )
+    aligned = _aligned_on_input(runs, normalised)
     count = len(aligned)
     ratio = np.sum(aligned.mean(axis=0) ** 2) / np.mean(np.sum(aligned**2, axis=(1, 2)))
     return float((ratio - 1.0 / count) / (1.0 - 1.0 / count))
+
+
+def unlocked_residual_sd(runs: Sequence[FlightRun], residuals: Sequence[np.ndarray]) -> np.ndarray:
+    """Per-channel standard deviation (SI units of the channel) of the part of the residual that
+    does not repeat from manoeuvre to manoeuvre: gusts, sensor noise, and whatever differs between
+    runs. Runs aligned on their input (as :func:`input_locked_fraction`); the spread about the mean
+    over M runs is scaled by M / (M - 1). NaN for a channel when fewer than two runs are given.
+    """
+    if len(runs) < 2:
+        return np.full(len(CHANNELS), np.nan)
+    aligned = _aligned_on_input(runs, residuals)
+    count = len(aligned)
+    spread = aligned - aligned.mean(axis=0)
+    return np.sqrt(np.mean(spread**2, axis=(0, 1)) * count / (count - 1))
 
 
 def flight_summary(where: dict[str, object]) -> list[str]:

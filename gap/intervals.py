@@ -1,7 +1,9 @@
 """Gap before and after an effect, per channel, with bootstrap intervals over withheld runs.
 
 gap (per channel) = sqrt(sum over runs of squared normalised residuals / samples): the residual's
-RMS in units of the measured signal's standard deviation; the total gap pools the channels.
+RMS in units of the channel's scale (tunnel and steady data: the measured signal's standard deviation
+or the value's standard error; flight: the baseline's run-to-run residual spread, the noise level);
+the total gap pools the channels.
 Intervals are the 5-95 % quantiles over resamples of the withheld runs (with replacement).
 """
 

@@ -12,7 +12,8 @@ differ by less than :data:`IDENTICAL_CLOSURE` (the same model family, e.g. added
 An effect is *detected* when the best held-out closure is at least :data:`MIN_CLOSURE` and its
 bootstrap 5 % quantile at least :data:`MIN_CLOSURE_LOWER_BOUND`. These floors sit above what a
 linearised simulator baseline leaves on its own nonlinear data (a fitted pitch-damping change
-closes 5-12 % of that gap), so that no-effect data are not blamed on an effect.
+closes 0-5 % of that gap at 30 % doublets, up to about 20 % at the study's 65 %; docs/gap-diagnosis.md),
+so that no-effect data are not blamed on an effect.
 """
 
 from __future__ import annotations

@@ -27,17 +27,24 @@ def assemble_report(
     where: dict[str, object],
     pointer: dict[str, object],
     seed: int,
+    verdict_gap: float | None = None,
 ) -> dict[str, object]:
     """The report's JSON fields (docs/gap-diagnosis.md) from the pieces of a diagnosis.
 
     ``before_sse`` and ``after_sse`` are the withheld runs' normalised squared residuals per
     channel (runs, channels) of the baseline and of the top-ranked effect; ``sample_counts`` the
-    samples per withheld run.
+    samples per withheld run. ``verdict_gap`` is the withheld baseline gap in units of the measured
+    signals' standard deviation that the ``unexplained`` rule reads (default: ``gap_before``, when
+    the channels were normalised that way).
     """
     top = ranking.entries[0]
     gap_before = gap_with_interval(before_sse, sample_counts, channels, seed)
     gap_after = gap_with_interval(after_sse, sample_counts, channels, seed)
-    verdict = verdict_of(ranking, gap_before["total"], where["input_locked_fraction"])
+    verdict = verdict_of(
+        ranking,
+        gap_before["total"] if verdict_gap is None else verdict_gap,
+        where["input_locked_fraction"],
+    )
     return {
         "format": "ornitail gap diagnosis",
         "version": 1,

@@ -55,15 +55,18 @@ class WakeProfile:
     """Both: span-wise bell profile of the wake's induced velocity at the tail.
 
     ``p(y) = floor + (1 - floor) exp(-((|y| - y_peak) / width)^2)`` with ``y_peak = peak_fraction *
-    140 mm`` and ``width`` falling linearly from ``width_at_57mm_m`` to ``width_at_126mm_m``. Off:
-    uniform, equal to the profile's mean over the wing span at that x_h (so only S and AR matter).
+    140 mm`` and ``width`` falling from ``width_at_57mm_m`` to ``width_at_126mm_m`` as
+    ``((x_h - 57 mm) / 69 mm)^narrowing_exponent`` (the high-velocity region narrows slowly at
+    first, then faster downstream). Off: uniform, equal to the profile's mean over the wing span at
+    that x_h (so only S and AR matter).
     """
 
     enabled: bool = True
-    peak_fraction_of_semi_span: float = 0.65
-    width_at_57mm_m: float = 0.0513
-    width_at_126mm_m: float = 0.0179
-    floor: float = 0.417
+    peak_fraction_of_semi_span: float = 0.65  # study: peak at 60-70 % of the wing span
+    width_at_57mm_m: float = 0.0347  # calibrated (docs/simulator.md)
+    width_at_126mm_m: float = 0.013  # calibrated
+    floor: float = 0.481  # calibrated
+    narrowing_exponent: float = 2.5  # calibrated: S1, AR1 keep their damping to 98 mm
 
 
 @dataclass(frozen=True)

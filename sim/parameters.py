@@ -34,30 +34,30 @@ class VehicleParameters:
     tail_fixed_mass_kg: float = 0.0024  # estimate: vertical tail, rudder and elevator actuators
     tail_fixed_offset_m: float = 0.012  # estimate: aft of the base-tail leading edge
     base_tail_mass_kg: float = 0.0004  # estimate: horizontal base tail with elevator
-    planform_areal_density_kg_m2: float = 0.0677  # calibrated: foam/foil planform, 0.68 g/100 cm^2
+    planform_areal_density_kg_m2: float = 0.0765  # calibrated: foil and frame, 0.77 g/100 cm^2
     # --- flapping wings (cycle-averaged) -------------------------------------------------------
     thrust_coefficient_n_per_hz2: float = 1.038e-3  # calibrated: T = k f^2 (+ inflow terms below)
     thrust_inflow_coefficient: float = 7.0e-4  # calibrated: dT = k_w f w_wing, N/(Hz m/s)
     thrust_crossflow_coefficient: float = 2.42e-3  # calibrated: translational lift k_u f u_wing^2
     counter_force_coefficient: float = 6.0e-3  # calibrated: X = -c f u_wing, N s/(m Hz)
     counter_force_inflow_sensitivity: float = 4.0  # calibrated: gives the study's X_w, M_w orders
-    wing_pressure_centre_station_m: float = -0.0077  # calibrated: where X acts (flapping hinge)
-    thrust_line_offset_m: float = 0.0198  # calibrated: thrust line along +x_b of the CG
-    wing_pitch_damping_coefficient: float = 2.5e-5  # calibrated: flapping counter torque, N m s/Hz
+    wing_pressure_centre_station_m: float = 0.0218  # study: wing arm 38 mm at 57 mm (+40 %)
+    thrust_line_offset_m: float = 0.0086  # calibrated: thrust line along +x_b of the CG
+    wing_pitch_damping_coefficient: float = 2.57e-5  # calibrated: flapping counter torque, N m s/Hz
     # relative amplitudes of flap-phase harmonics 1..6 of thrust, counter force and moment
     thrust_harmonics: tuple[float, ...] = (0.35, 0.80, 0.30, 0.15, 0.08, 0.04)
     thrust_harmonic_phases_rad: tuple[float, ...] = (0.3, 1.1, -0.7, 2.0, 0.5, -1.4)
     x_force_harmonic_n_per_hz2: tuple[float, ...] = (1.5e-4, 6.0e-5, 3.0e-5, 1.5e-5, 8e-6, 4e-6)
     x_force_harmonic_phases_rad: tuple[float, ...] = (1.2, -0.4, 0.9, -1.8, 0.2, 1.5)
     # --- flapping wake -------------------------------------------------------------------------
-    wake_disk_area_m2: float = 0.0444  # calibrated: ~280 mm span x 160 mm swept stroke
-    wake_decay_length_m: float = 0.44  # calibrated: e-folding distance of the jet's peak velocity
-    wake_convection_fraction: float = 0.379  # calibrated: wake travels at ~38 % of jet speed
+    wake_disk_area_m2: float = 0.054  # calibrated: ~280 mm span x 190 mm swept stroke
+    wake_decay_length_m: float = 0.70  # calibrated: e-folding distance of the jet's peak velocity
+    wake_convection_fraction: float = 0.266  # calibrated: wake travels at ~27 % of jet speed
     # --- tail aerodynamics ---------------------------------------------------------------------
-    tail_incidence_rad: float = -0.153  # calibrated: tail leading edge set 8.8 deg towards -x_b
-    tail_attached_normal_force_limit: float = 0.513  # calibrated: low-Re plate separates early
+    tail_incidence_rad: float = -0.121  # calibrated: tail leading edge set 6.9 deg towards -x_b
+    tail_separation_sine: float = 0.117  # calibrated: attached flow saturates past ~6.7 deg, any AR
     tail_crossflow_drag_coefficient: float = 1.0  # estimate: flat plate normal-force at 90 deg
-    tail_friction_drag_coefficient: float = 0.06  # estimate: laminar plate at Re ~ 1e4
+    tail_friction_drag_coefficient: float = 0.0235  # estimate: Blasius, both sides, Re ~ 1.3e4
     elevator_effectiveness: float = 0.45  # estimate: flap chord ratio ~0.35 (tau)
     elevator_half_span_m: float = 0.040  # study: base tail 80 mm span
     tail_strip_count: int = 48

@@ -12,11 +12,14 @@ The tail plane is set at incidence ``i_t`` to the fuselage (leading edge towards
 ``i_t U_z`` to U_x (small-angle rotation). Angle of attack ``alpha = atan2(U_x, U_z)``; normal-force
 coefficient of a low-aspect-ratio flat plate ``C_N = N_att + C_Dc sin(alpha)|sin(alpha)| + a tau_e
 delta_e`` (elevator term on the base-tail strips only), where the attached-flow part ``N_att = a
-sin(alpha) cos(alpha) / sqrt(1 + (a sin(alpha) / C_att)^2)`` has Helmbold's lift slope ``a = 2 pi AR
-/ (2 + sqrt(AR^2 + 4))`` at small angles and saturates at ``C_att`` (low-Reynolds-number separation)
-at the large angles the tail meets in slow flight. The normal force acts along +x_b, the friction
-drag ``C_D0`` along the local flow. Positive elevator deflection pushes the tail towards +x_b, i.e.
-gives a nose-down (positive) moment.
+sin(alpha) cos(alpha) / sqrt(1 + (sin(alpha) / s_sep)^2)`` has Helmbold's lift slope ``a = 2 pi AR
+/ (2 + sqrt(AR^2 + 4))`` at small angles and saturates past the separation angle ``asin(s_sep)``
+(low-Reynolds-number plate). The separation angle does not depend on AR, so a higher-AR tail
+carries a proportionally larger attached normal force (its advantage over a low-AR tail of the same
+area). The normal force acts along the plate's normal ``(1, i_t)`` in (x_b, z_b): a tail pushed
+towards +x_b also pulls the vehicle slightly forward (-z_b), which the wings' thrust need not supply.
+The friction drag ``C_D0`` acts along the local flow. Positive elevator deflection pushes the tail
+towards +x_b, i.e. gives a nose-down (positive) moment.
 """
 
 from __future__ import annotations
@@ -110,11 +113,11 @@ def tail_loads(
     speed = np.sqrt(speed_squared) + 1e-12
     sin_alpha = flow_x / speed
     cos_alpha = flow_z / speed
-    attached = strips.lift_slope_per_rad * sin_alpha
     attached = (
-        attached
+        strips.lift_slope_per_rad
+        * sin_alpha
         * cos_alpha
-        / np.sqrt(1.0 + (attached / parameters.tail_attached_normal_force_limit) ** 2)
+        / np.sqrt(1.0 + (sin_alpha / parameters.tail_separation_sine) ** 2)
     )
     normal_coefficient = (
         attached
@@ -126,6 +129,7 @@ def tail_loads(
     )
     pressure_area = 0.5 * AIR_DENSITY_KG_M3 * speed_squared * strips.chord_m * strips.width_m
     friction = pressure_area * parameters.tail_friction_drag_coefficient
-    strip_x = pressure_area * normal_coefficient + friction * sin_alpha
-    strip_z = friction * cos_alpha
+    normal_force = pressure_area * normal_coefficient
+    strip_x = normal_force + friction * sin_alpha
+    strip_z = parameters.tail_incidence_rad * normal_force + friction * cos_alpha
     return float(strip_x.sum()), float(strip_z.sum()), float(arm @ strip_x)

@@ -4,7 +4,8 @@ tail).
 Actuator-disk estimate of the far-wake induced velocity for thrust T and axial inflow V_in (air
 arriving along +z_b at the wings, V_in = -w): ``v_far = sqrt(V_in^2 + 2 T / (rho A)) - V_in``. At
 the tail it is ``v(y) = v_far exp(-x_h / L_decay) p(y)``, with the span-wise profile p of
-:class:`effects.WakeProfile` (bell peaking at ~65 % of the wing semi-span, narrowing downstream);
+:class:`effects.WakeProfile` (bell peaking at ~65 % of the wing semi-span, narrowing downstream
+ever faster);
 with that effect off the profile is uniform and equal to the bell's mean over the wing span at that
 x_h.
 """
@@ -27,7 +28,8 @@ def bell_profile(
 ) -> np.ndarray:
     """The bell-shaped span-wise profile p(y) at tail position x_h (dimensionless, peak 1)."""
     fraction = (x_h_m - _X_H_FIRST_M) / (_X_H_LAST_M - _X_H_FIRST_M)
-    width = wake.width_at_57mm_m + fraction * (wake.width_at_126mm_m - wake.width_at_57mm_m)
+    narrowing = math.copysign(abs(fraction) ** wake.narrowing_exponent, fraction)
+    width = wake.width_at_57mm_m + narrowing * (wake.width_at_126mm_m - wake.width_at_57mm_m)
     width = max(width, 0.25 * wake.width_at_126mm_m)
     peak = wake.peak_fraction_of_semi_span * semi_span_m
     distance = (np.abs(np.asarray(spanwise_position_m, dtype=float)) - peak) / width

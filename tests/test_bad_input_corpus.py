@@ -586,12 +586,12 @@ RIG_EDITS: dict[str, tuple[str, str, str]] = {
     "route-bogus": ('route = "serial_daq"', 'route = "usb"', "route"),
     "route-can": ('route = "serial_daq"', 'route = "can"', "route"),
     "tool-transform-nan": (
-        "tool_transform_mm_deg = [-12.0, 0.0, -5.0, 180.0, 0.0, 0.0]",
-        "tool_transform_mm_deg = [nan, 0.0, -5.0, 180.0, 0.0, 0.0]",
+        "tool_transform_mm_deg = [-12.0, 0.0, -5.7, 180.0, 0.0, 0.0]",
+        "tool_transform_mm_deg = [nan, 0.0, -5.7, 180.0, 0.0, 0.0]",
         "tool_transform_mm_deg",
     ),
     "tool-transform-short": (
-        "tool_transform_mm_deg = [-12.0, 0.0, -5.0, 180.0, 0.0, 0.0]",
+        "tool_transform_mm_deg = [-12.0, 0.0, -5.7, 180.0, 0.0, 0.0]",
         "tool_transform_mm_deg = [1.0]",
         "tool_transform_mm_deg",
     ),

@@ -59,7 +59,8 @@ def test_cutting_finds_every_doublet_with_run_in_and_turn_end(simulated_log):
         # deviations start near zero (run-in mean removed) and the steady state is the trim
         run_in = manoeuvre.deviations[manoeuvre.deviations["time_s"] < 0.5]
         assert abs(run_in["theta_rad"].mean()) < 1e-12
-        assert manoeuvre.steady_state.airspeed_m_s == pytest.approx(0.68, abs=0.03)
+        # S3 at 98 mm trims at 0.594 m/s (docs/simulator.md); 0.03 m/s covers gusts and drift
+        assert manoeuvre.steady_state.airspeed_m_s == pytest.approx(0.594, abs=0.03)
 
 
 def test_cutting_refuses_a_log_with_missing_columns(simulated_log):

@@ -55,12 +55,16 @@ def test_representative_oscillatory_mode_matches_the_simulator(campaign_results,
     mode = _oscillatory(result)
     # The identified linear model fits the filtered response of the nonlinear cycle-averaged
     # vehicle with flapping-frequency coupling and 13 deg doublets; its bias against the
-    # small-perturbation linearisation was measured at <= 0.015 in damping and <= 2 % in
-    # frequency (S1, S3, S5). 0.03 and 5 % cover it with margin and stay far below the S1-S5
-    # difference (0.25) that the trend test resolves.
-    assert mode.damping_ratio == pytest.approx(reference.oscillatory_damping_ratio(), abs=0.03)
+    # small-perturbation linearisation, measured on the simulator of issue 13 (the study's wing
+    # arm, a tail that separates past 6.7 deg): damping +0.020 to +0.058 and natural frequency
+    # 1-5.5 % low (representative models of S3, 4 campaigns of 5 manoeuvres; S5, 3 campaigns of
+    # 6), against colored sigmas of 0.003-0.016. It is a bias, not scatter: +0.014 on a
+    # noise-free S3 manoeuvre, the rest from the sensor noise and the gusts in about equal parts
+    # (the earlier, stiffer model gave <= 0.015 and <= 2 %). 0.07 and 7 % cover it and stay far
+    # below the S1-S5 difference (0.28) that the trend test resolves.
+    assert mode.damping_ratio == pytest.approx(reference.oscillatory_damping_ratio(), abs=0.07)
     assert mode.natural_frequency_rad_s == pytest.approx(
-        reference.oscillatory_natural_frequency_rad_s(), rel=0.05
+        reference.oscillatory_natural_frequency_rad_s(), rel=0.07
     )
     # well-excited pitch derivatives: within 3 standard errors of the representative model
     # (statistical scatter) plus 5 % of the value (the same model-structure bias as above)

@@ -1,9 +1,11 @@
 """The diagnosis' statistical pieces on synthetic numbers: ranking, intervals, sparse regression,
-magnitude fit."""
+magnitude fit, the flight noise level."""
 
 import numpy as np
 import pytest
 
+from ornitail.gap.flight_data import FlightRun
+from ornitail.gap.flight_localisation import unlocked_residual_sd
 from ornitail.gap.intervals import gap_with_interval
 from ornitail.gap.magnitude_fit import fit_magnitude
 from ornitail.gap.ranking import CandidateEvidence, rank_candidates
@@ -76,3 +78,22 @@ def test_magnitude_fit_escapes_a_local_minimum_and_refines():
     magnitude, value = fit_magnitude(cost, (-1.0, 1.0))
     assert magnitude == pytest.approx(0.37, abs=1e-3)
     assert value == pytest.approx(0.0, abs=1e-6)
+
+
+def test_the_noise_level_is_the_run_to_run_spread_not_the_repeated_error():
+    """unlocked_residual_sd: white noise of a known sd per channel on top of an error that every
+    run repeats (locked to the input) gives back the noise's sd, whatever the repeated error."""
+    generator = np.random.default_rng(4)
+    time_s = np.arange(300) / 64.0
+    repeated = np.outer(np.sin(2.0 * time_s), [5.0, 0.0, 1.0, 20.0])  # the same in every run
+    noise_sd = np.array([0.1, 0.3, 0.02, 1.0])
+    runs, residuals = [], []
+    for index in range(12):
+        runs.append(
+            FlightRun(f"t#{index}", time_s, np.zeros((300, 4)), np.zeros(300), 0.5, 0.3, 0.7)
+        )
+        residuals.append(repeated + noise_sd * generator.standard_normal((300, 4)))
+    # 12 x 300 samples per channel: the sd estimate scatters by ~1/sqrt(2 x 3300) = 1.2 %; 5 %
+    # is 4 of those
+    assert unlocked_residual_sd(runs, residuals) == pytest.approx(noise_sd, rel=0.05)
+    assert np.all(np.isnan(unlocked_residual_sd(runs[:1], residuals[:1])))

@@ -145,11 +145,16 @@ def _study_tails() -> list[str]:
 @pytest.mark.parametrize("x_h_mm", [57.0, 98.0])
 def test_steady_states_are_of_the_study_order(tail, x_h_mm) -> None:
     trim = model(tail, x_h_mm).trim
-    # study: theta 20-29 deg, V 0.7-0.9 m/s, f 13-14 Hz at 57 mm; 98 mm flies slower and flatter.
-    # The bounds widen the study's by its 2-sigma day-to-day scatter (~2 deg, 0.1 m/s, 0.2 Hz).
-    assert 18.0 < math.degrees(trim.theta_rad) < 31.0
-    assert 0.6 < trim.airspeed_m_s < 0.95
-    assert 12.8 < trim.flapping_frequency_hz < 14.2
+    # study: theta 20-29 deg, V 0.7-0.9 m/s, f 13-14 Hz at 57 mm; the bounds widen these by its
+    # 2-sigma day-to-day scatter (~2 deg, 0.1 m/s, 0.2 Hz). 98 mm flies slower and flatter: the
+    # CG moves ~10 mm aft and the wings' moment arm (38 mm at 57 mm, +40 % at 126 mm, domain.md 1)
+    # grows ~25 %, so tan(theta) falls ~20 % and the slower flight needs up to 0.5 Hz more.
+    lowest_theta_deg, lowest_speed, highest_frequency = (
+        (18.0, 0.6, 14.2) if x_h_mm == 57.0 else (14.0, 0.45, 14.4)
+    )
+    assert lowest_theta_deg < math.degrees(trim.theta_rad) < 31.0
+    assert lowest_speed < trim.airspeed_m_s < 0.95
+    assert 12.8 < trim.flapping_frequency_hz < highest_frequency
 
 
 @pytest.mark.parametrize(
@@ -158,8 +163,8 @@ def test_steady_states_are_of_the_study_order(tail, x_h_mm) -> None:
 def test_steady_states_near_the_measured_ones_at_57mm(row) -> None:
     # tolerances: the model is calibrated to orders and trends, not fitted to these six points; the
     # study's own linear fits miss them by up to 1.9 deg, 0.05 m/s, 0.34 Hz (Table 3), and the
-    # vehicle drifts between days; the model's worst cases are 3.3 deg (AR2), 0.064 m/s (AR4),
-    # 0.34 Hz (S4) (docs/simulator.md)
+    # vehicle drifts between days; the model's worst cases are 1.1 deg (AR6), 0.074 m/s (AR4),
+    # 0.28 Hz (S4) (docs/simulator.md); tests/sim/test_study_findings.py holds the tighter bounds
     trim = model(row["tail"][:-1], 57.0).trim
     assert abs(math.degrees(trim.theta_rad) - row["theta_meas_deg"]) < 3.5
     assert abs(trim.airspeed_m_s - row["v_meas_m_s"]) < 0.08

@@ -23,9 +23,9 @@ from ornitail.sim.tunnel import true_cycle_average
 from ornitail.sim.tunnel_truth import tunnel_truth
 
 THETA_RAD, V_M_S, F_HZ = math.radians(25.0), 0.8, 13.5
-REFERENCE_STATION_M = 0.065
+REFERENCE_STATION_M = 0.0657
 """The simulated rig's reference point: sensor origin (station 60 mm, 12 mm along +x_b) moved by the tool
-transform's [-12, 0, -5] mm in sensor axes (sensor z = -z_b), i.e. on the fuselage axis at station 65 mm."""
+transform's [-12, 0, -5.7] mm in sensor axes (sensor z = -z_b), i.e. on the fuselage axis at station 65.7 mm."""
 
 
 @pytest.fixture(scope="module")
