@@ -222,6 +222,7 @@ class StabilityDerivatives:
                     "unit": unit,
                     "with_respect_to": "steady state",
                     "variance_inflation": math.nan,
+                    "resolution": "",
                     **common,
                 }
             )
@@ -235,6 +236,9 @@ class StabilityDerivatives:
                         "unit": derivative_unit(load, variable),
                         "with_respect_to": variable,
                         "variance_inflation": self.variance_inflation.get(variable, math.nan),
+                        "resolution": resolution_label(
+                            getattr(self, name), self.sigma.get(name, math.nan)
+                        ),
                         **common,
                     }
                 )
@@ -247,6 +251,7 @@ class StabilityDerivatives:
                     "unit": derivative_unit(name[0], "w").replace("(m/s)", "(rad/s)"),
                     "with_respect_to": "q",
                     "variance_inflation": math.nan,
+                    "resolution": "not measurable on the clamped balance",
                     "reduced_chi_square": math.nan,
                     "degrees_of_freedom": 0,
                     "sigma_inflation": math.nan,
@@ -261,7 +266,12 @@ class StabilityDerivatives:
         """Values, sigmas, units, steady state, diagnostics and statements, JSON-serialisable."""
         derivatives = {}
         for row in self.table().itertuples():
-            derivatives[row.name] = {"value": row.value, "sigma": row.sigma, "unit": row.unit}
+            derivatives[row.name] = {
+                "value": row.value,
+                "sigma": row.sigma,
+                "unit": row.unit,
+                **({"resolution": row.resolution} if row.resolution else {}),
+            }
         return {
             "configuration": self.configuration,
             "frame": self.frame,
@@ -498,6 +508,21 @@ def _configuration_name(points: pd.DataFrame) -> str:
     return f"{tail} x_h={float(points['x_h_mm'].iloc[0]):.0f}mm"
 
 
+RESOLVED = "resolved from zero (2 sigma)"
+INCLUDES_ZERO = "2-sigma interval includes zero"
+BELOW_SIGMA = "smaller than its sigma"
+
+
+def resolution_label(value: float, sigma: float) -> str:
+    """Whether a derivative is told apart from zero: :data:`RESOLVED` beyond 2 sigma, :data:`INCLUDES_ZERO`
+    within, :data:`BELOW_SIGMA` within 1 sigma; ``"not estimated"`` without a value."""
+    if not (math.isfinite(value) and math.isfinite(sigma)):
+        return "not estimated"
+    if abs(value) < sigma:
+        return BELOW_SIGMA
+    return INCLUDES_ZERO if abs(value) <= 2.0 * sigma else RESOLVED
+
+
 def _statements(result: StabilityDerivatives) -> list[str]:
     lines = [
         f"Derivatives of {result.configuration}, {result.frame}, about {result.reference_point}, at "
@@ -514,6 +539,19 @@ def _statements(result: StabilityDerivatives) -> list[str]:
                 f"standard errors say; sigmas inflated by sqrt(chi2_red) = "
                 f"{diagnostics.standard_error_inflation:.2f}."
             )
+    unresolved = {
+        name: resolution_label(getattr(result, name), result.sigma[name])
+        for load, _, _ in LOADS
+        for name in (load + variable for variable in result.variables)
+        if name in result.sigma
+    }
+    unresolved = {name: label for name, label in unresolved.items() if label != RESOLVED}
+    if unresolved:
+        lines.append(
+            "Not resolved from zero: "
+            + ", ".join(f"{name} ({label})" for name, label in unresolved.items())
+            + "; their sign is not established by these sweeps."
+        )
     estimable_missing = sorted(
         {name for name in result.not_estimable if name not in NOT_MEASURABLE_CLAMPED}
     )

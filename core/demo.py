@@ -186,8 +186,10 @@ def _render(result: dict[str, Any]) -> str:
         )
         for name, entry in derivatives.items():
             if isinstance(entry, dict) and "value" in entry and name[-1] in "uwf":
+                resolution = entry.get("resolution", "")
                 lines.append(
                     f"  {name:3s} {entry['value']:+.4g} +- {entry['sigma']:.2g} {entry.get('unit', '')}"
+                    + ("" if resolution.startswith("resolved") else f"   ({resolution})")
                 )
     if result.get("truth"):
         lines += _truth_lines(result["truth"])

@@ -9,10 +9,14 @@ import pytest
 
 from ornitail.acquisition.sweep_plan import plan_from_document
 from ornitail.balance.derivatives import (
+    BELOW_SIGMA,
     DERIVATIVE_NAMES,
+    INCLUDES_ZERO,
     NOT_MEASURABLE_CLAMPED,
+    RESOLVED,
     body_velocities,
     fit_stability_derivatives,
+    resolution_label,
 )
 from ornitail.core.errors import UserInputError
 from ornitail.sim.effects import EffectSet
@@ -119,6 +123,40 @@ def test_scatter_beyond_the_stated_errors_inflates_sigma_and_says_so():
     assert any(
         "inflated by sqrt(chi2_red)" in line and line.startswith("X:") for line in stated.statements
     )
+
+
+def test_derivatives_within_their_noise_are_labelled_not_resolved_from_zero():
+    """Z does not depend on u or w here and M not on u: with noise, those fitted slopes sit within 2 sigma of
+    zero and are labelled so in the table, the JSON and one statement; the others are resolved."""
+    points = one_variable_sweep_points()
+    scatter = np.random.default_rng(8).normal(0.0, 1e-5, len(points))
+
+    def loads(du, dw, df):
+        return (
+            0.1 - 0.13 * du - 0.04 * dw + 0.006 * df + scatter,
+            -0.2 + 0 * du - 0.03 * df + scatter,
+            1e-3 * dw + 3e-4 * df + scatter,
+        )
+
+    fit = fit_stability_derivatives(with_loads(points, loads, se=1e-5), max_sweep_order=1)
+    labels = fit.table().set_index("name")["resolution"]
+    for name in ("Xu", "Xw", "Xf", "Zf", "Mw", "Mf"):
+        assert labels[name] == RESOLVED, name
+    for name in ("Zu", "Zw", "Mu"):
+        # the truth is 0: the estimate is unresolved whatever its noise (a 4.6 % chance each of passing 2 sigma)
+        expected = resolution_label(getattr(fit, name), fit.sigma[name])
+        assert labels[name] == expected and expected in (INCLUDES_ZERO, BELOW_SIGMA, RESOLVED)
+    unresolved = [name for name in ("Zu", "Zw", "Mu") if labels[name] != RESOLVED]
+    assert (
+        unresolved
+    )  # seed 8: at least one of the three (all three with 0.95^3 = 86 % for any seed)
+    (line,) = [line for line in fit.statements if line.startswith("Not resolved from zero")]
+    assert all(name in line for name in unresolved)
+    assert fit.to_json_dict()["derivatives"][unresolved[0]]["resolution"] == labels[unresolved[0]]
+    assert labels["Xq"] == "not measurable on the clamped balance"
+    assert resolution_label(0.5, 1.0) == BELOW_SIGMA
+    assert resolution_label(1.5, 1.0) == INCLUDES_ZERO
+    assert resolution_label(-2.5, 1.0) == RESOLVED
 
 
 def test_missing_sweeps_are_reported_as_not_estimable_and_q_derivatives_always():
