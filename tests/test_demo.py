@@ -1,4 +1,4 @@
-"""The README's main job, run as a user runs it: `ornitail demo` on the simulated rig (about 90 s)."""
+"""The README's main job, run as a user runs it: `ornitail demo` on the simulated rig (about 2 min)."""
 
 import json
 import math
