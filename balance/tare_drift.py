@@ -192,7 +192,7 @@ def drift_statement(drift_models: list[str], drift_checks: Sequence[str] = ()) -
 
 @dataclass(frozen=True)
 class DriftCheck:
-    """Whether a run's tares agree with drift that is straight between them, and what a bend costs the points.
+    """Whether a run's tares agree with drift that is straight between them, and what is done when they do not.
 
     Every three successive tares at the same pitch and tail state test the straight line: the middle one's
     departure from the line through its neighbours, against the noise of the three (chi-square, 6 per triple).
@@ -226,7 +226,7 @@ class DriftCheck:
         return self.p_value < DRIFT_CHECK_SIGNIFICANCE
 
     def statement(self) -> str:
-        """One line for the output: what the check saw and whether it inflated the points' errors."""
+        """One line for the output: what the check saw and whether zeros go through three tares."""
         if not self.triple_chi_squares:
             return f"Drift check ({self.run_id}): fewer than three tares at any pitch, straight drift not tested."
         verdict = (

@@ -11,8 +11,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cache
+from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from ornitail.sim.configuration import study_configuration
 from ornitail.sim.dynamics import LinearisedModel, linearise
@@ -22,17 +24,29 @@ POSITIONS_MM = (57.0, 98.0, 114.0, 126.0)
 AREA_SERIES = ("S1", "S2", "S3", "S4", "S5", "S6")
 ASPECT_SERIES = ("AR1", "AR2", "S3", "AR4", "AR5", "AR6")  # S3 is AR3
 ALL_TAILS = AREA_SERIES + ("AR1", "AR2", "AR4", "AR5", "AR6", "T1", "T2", "T3")
-# Table 3 of the study (reference/steady_state_validation.csv): theta deg, V m/s, f Hz at 57 mm
-TABLE_3 = {
-    "AR2": (21.20, 0.71, 13.77),
-    "AR4": (25.30, 0.74, 13.41),
-    "AR6": (28.83, 0.87, 13.05),
-    "S2": (22.46, 0.70, 13.60),
-    "S4": (24.45, 0.76, 13.74),
-    "S6": (28.53, 0.82, 13.51),
-}
+TABLE_3_PATH = (
+    Path(__file__).resolve().parents[1]
+    / "tests"
+    / "data"
+    / "reference"
+    / "steady_state_validation.csv"
+)
+"""Table 3 of the study (a copy of ../shared/reference/steady_state_validation.csv): free-flight steady states at
+57 mm of tails flown on one day (rows ``AR2a`` ...)."""
+
+
+def table_3() -> dict[str, tuple[float, float, float]]:
+    """Measured theta (deg), V (m/s) and f (Hz) at 57 mm by tail (``AR2``, ..., ``S6``), from Table 3."""
+    rows = pd.read_csv(TABLE_3_PATH, comment="#")
+    return {
+        row["tail"][:-1]: (row["theta_meas_deg"], row["v_meas_m_s"], row["f_meas_hz"])
+        for row in rows.to_dict("records")
+    }
+
+
 TABLE_3_SCATTER = (1.4, 0.08, 0.6)  # deg, m/s, Hz: the study's own scatter (issue 13)
 # damping ratio of the pitch oscillation implied by Table 4 at 98 mm (Mu, Mw, Xq, Zq sign-flipped)
+# (m = 23.5 g, I_yy = 1.5e-4 kg m^2, theta0 = 22 deg, V0 = 0.68 m/s, docs/frames.md)
 TABLE_4_DAMPING = {"S1": 0.15, "S2": 0.21, "S3": 0.34, "S5": 0.39}
 TABLE_4_DAMPING_TOLERANCE = 0.05
 
@@ -123,7 +137,7 @@ def findings() -> list[Finding]:
     )
     # Table 3 steady states at 57 mm
     worst = np.zeros(3)
-    for tail, measured in TABLE_3.items():
+    for tail, measured in table_3().items():
         simulated = (theta_deg(tail, 57.0), speed(tail, 57.0), frequency(tail, 57.0))
         worst = np.maximum(worst, np.abs(np.subtract(simulated, measured)))
     rows.append(

@@ -8,54 +8,31 @@ that the Table 4 derivatives imply.
 
 from __future__ import annotations
 
-import math
-from functools import cache
+import importlib.util
+import sys
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import pytest
 
-from ornitail.sim.configuration import study_configuration
-from ornitail.sim.dynamics import LinearisedModel, linearise
-from ornitail.sim.effects import EffectSet
+# The simulator's trims and the study's numbers come from the benchmark that prints the same findings (one home).
+_PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "study_findings.py"
+_SPEC = importlib.util.spec_from_file_location("ornitail_study_findings", _PATH)
+study = importlib.util.module_from_spec(_SPEC)
+sys.modules[_SPEC.name] = study
+_SPEC.loader.exec_module(study)
 
-POSITIONS_MM = (57.0, 98.0, 114.0, 126.0)
-AREA_SERIES = ("S1", "S2", "S3", "S4", "S5", "S6")  # AR ~3.45, growing S
-ASPECT_SERIES = ("AR1", "AR2", "S3", "AR4", "AR5", "AR6")  # S ~118 cm^2, growing AR (S3 = AR3)
-TABLE_3 = Path(__file__).parents[1] / "data" / "reference" / "steady_state_validation.csv"
-# Damping ratio of the pitch oscillation that Table 4's derivatives give at 98 mm, with Mu, Mw, Xq, Zq
-# sign-flipped (docs/frames.md), m = 23.5 g, I_yy = 1.5e-4 kg m^2, theta0 = 22 deg, V0 = 0.68 m/s.
-TABLE_4_DAMPING_AT_98_MM = {"S1": 0.15, "S2": 0.21, "S3": 0.34, "S5": 0.39}
-
-
-@cache
-def model(tail: str, x_h_mm: float) -> LinearisedModel:
-    return linearise(study_configuration(tail, x_h_mm), EffectSet())
-
-
-def theta_deg(tail: str, x_h_mm: float) -> float:
-    return math.degrees(model(tail, x_h_mm).trim.theta_rad)
-
-
-def speed(tail: str, x_h_mm: float) -> float:
-    return model(tail, x_h_mm).trim.airspeed_m_s
-
-
-def frequency(tail: str, x_h_mm: float) -> float:
-    return model(tail, x_h_mm).trim.flapping_frequency_hz
-
-
-def damping(tail: str, x_h_mm: float) -> float:
-    return model(tail, x_h_mm).oscillatory_damping_ratio()
-
-
-def natural_frequency(tail: str, x_h_mm: float) -> float:
-    return model(tail, x_h_mm).oscillatory_natural_frequency_rad_s()
-
-
-def increasing(values: list[float]) -> bool:
-    return all(later > earlier for earlier, later in zip(values, values[1:], strict=False))
+POSITIONS_MM, AREA_SERIES, ASPECT_SERIES = (
+    study.POSITIONS_MM,
+    study.AREA_SERIES,
+    study.ASPECT_SERIES,
+)
+model, theta_deg, speed, frequency = study.model, study.theta_deg, study.speed, study.frequency
+damping, natural_frequency, increasing = (
+    study.damping,
+    study.natural_frequency,
+    study.strictly_increasing,
+)
 
 
 @pytest.mark.parametrize("x_h_mm", POSITIONS_MM)
@@ -91,17 +68,15 @@ def test_near_the_wings_aspect_ratio_acts_more_strongly_than_area() -> None:
     assert aspect_gain > area_gain > 0.0
 
 
-@pytest.mark.parametrize(
-    "row", pd.read_csv(TABLE_3, comment="#").to_dict("records"), ids=lambda row: row["tail"]
-)
-def test_table_3_steady_states_at_57mm_within_the_study_scatter(row) -> None:
+@pytest.mark.parametrize(("tail", "measured"), sorted(study.table_3().items()))
+def test_table_3_steady_states_at_57mm_within_the_study_scatter(tail, measured) -> None:
     # The study's own scatter (issue 13): its linear fits miss these points by up to 1.9 deg,
     # 0.05 m/s and 0.34 Hz and its sigma(meas) reach ~1.9 deg, 0.1 m/s, 0.5 Hz (Table 3 ratios);
     # 1.4 deg, 0.08 m/s and 0.6 Hz are the issue's bounds for a model not fitted point by point.
-    tail = row["tail"][:-1]
-    assert abs(theta_deg(tail, 57.0) - row["theta_meas_deg"]) < 1.4
-    assert abs(speed(tail, 57.0) - row["v_meas_m_s"]) < 0.08
-    assert abs(frequency(tail, 57.0) - row["f_meas_hz"]) < 0.6
+    theta_meas_deg, v_meas_m_s, f_meas_hz = measured
+    assert abs(theta_deg(tail, 57.0) - theta_meas_deg) < 1.4
+    assert abs(speed(tail, 57.0) - v_meas_m_s) < 0.08
+    assert abs(frequency(tail, 57.0) - f_meas_hz) < 0.6
 
 
 def _frequency_drop(series: tuple[str, ...], x_h_mm: float) -> float:
@@ -184,7 +159,7 @@ def test_an_oscillatory_pair_and_real_poles_near_minus_1_and_minus_10(tail, x_h_
     assert -15.0 < fast < -5.0
 
 
-@pytest.mark.parametrize("tail", sorted(TABLE_4_DAMPING_AT_98_MM))
+@pytest.mark.parametrize("tail", sorted(study.TABLE_4_DAMPING))
 def test_damping_ratio_at_98mm_matches_table_4(tail) -> None:
     # 0.05: the spread of the zeta Table 4 implies over I_yy = 1.3-1.7e-4 kg m^2 and the trims
-    assert damping(tail, 98.0) == pytest.approx(TABLE_4_DAMPING_AT_98_MM[tail], abs=0.05)
+    assert damping(tail, 98.0) == pytest.approx(study.TABLE_4_DAMPING[tail], abs=0.05)
