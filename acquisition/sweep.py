@@ -41,6 +41,7 @@ from ornitail.acquisition.daq_protocol import link_ceiling_frames_per_s
 from ornitail.acquisition.exclusive_locks import ExclusiveLock, LockHeld
 from ornitail.acquisition.instrument_errors import InstrumentError
 from ornitail.acquisition.live_balance import LiveBalance, balance_stream_layout
+from ornitail.acquisition.motor_running_log import MotorRunningLog
 from ornitail.acquisition.recorder import Recorder, RunAborted
 from ornitail.acquisition.recording_layout import (
     RunConfiguration,
@@ -333,6 +334,11 @@ class _SweepContext:
     durations_s: list[float] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     lossy_points: dict[int, str] = field(default_factory=dict)  # plan index -> what it lost
+    motor_log: MotorRunningLog = field(default_factory=MotorRunningLog)
+
+    def observe_motor(self, running: bool) -> None:
+        """Note a reading of the motor (running or standing) for the drift clock."""
+        self.motor_log.observe(running, self.rig.balance_samples_since_start(), self.stream)
 
     def eta_s(self) -> float:
         remaining = (
@@ -408,6 +414,9 @@ def _settle(context: _SweepContext, point: SetPoint) -> float:
             (name, read(), target, tolerance, to_user, unit)
             for name, read, target, tolerance, to_user, unit in targets
         ]
+        context.observe_motor(
+            next(value for name, value, *_ in readings if name == "flapping frequency") > 0.0
+        )
         off = [reading for reading in readings if abs(reading[1] - reading[2]) > reading[3]]
         now_s = rig.now_s()
         if off:
@@ -426,17 +435,58 @@ def _settle(context: _SweepContext, point: SetPoint) -> float:
         _wait_rig_s(context, POLL_INTERVAL_S)
 
 
-def _take_rows(context: _SweepContext, recorder: Recorder, count: int) -> int:
-    """Wait for ``count`` rows sampled from now on; return the first one's row index."""
+@dataclass
+class RecordConditions:
+    """The rig's conditions read while one record's rows arrive, every ``POLL_INTERVAL_S`` of rig time.
+
+    The set point is reached only within the settle tolerances and the fan still creeps towards it during the
+    record (first-order lag), so the conditions the loads belong to are these means, not the set values.
+    Velocity in m/s from the fan's rpm and the tunnel table, pitch in rad from the strut, motor speed in rpm.
+    """
+
+    velocities_m_s: list[float] = field(default_factory=list)
+    pitches_rad: list[float] = field(default_factory=list)
+    motor_rpms: list[float] = field(default_factory=list)
+
+    def read(self, rig: Rig) -> None:
+        """Take one reading of every condition the rig can report."""
+        self.velocities_m_s.append(rig.read_tunnel_velocity_m_s())
+        self.pitches_rad.append(rig.read_pitch_rad())
+        if rig.motor is not None:
+            self.motor_rpms.append(rig.motor.read_rpm())
+
+    def motor_rpm_mean(self) -> float | None:
+        """Mean motor speed over the record, rpm (None without a motor)."""
+        return math.fsum(self.motor_rpms) / len(self.motor_rpms) if self.motor_rpms else None
+
+    def journal_values(self) -> dict[str, float | int]:
+        """The means for the set point's ``extra`` (``tunnel_velocity_mean_m_s``, ``pitch_mean_rad``)."""
+        return {
+            "tunnel_velocity_mean_m_s": math.fsum(self.velocities_m_s) / len(self.velocities_m_s),
+            "pitch_mean_rad": math.fsum(self.pitches_rad) / len(self.pitches_rad),
+            "condition_readings": len(self.velocities_m_s),
+        }
+
+
+def _take_rows(
+    context: _SweepContext, recorder: Recorder, count: int
+) -> tuple[int, RecordConditions]:
+    """Wait for ``count`` rows sampled from now on; return the first one's row index and the conditions read
+    while they arrived."""
     _wait_rig_s(context, RECORD_START_DELAY_S)
     samples_since_start = context.rig.balance_samples_since_start()
     first = context.stream.first_row_sampled_after(samples_since_start)
     while first is None:
         _wait_rig_s(context, 0.05)
         first = context.stream.first_row_sampled_after(samples_since_start)
-    while recorder.next_sample_index < first + count:
-        _wait_rig_s(context, 0.05)
-    return first
+    conditions = RecordConditions()
+    while True:
+        conditions.read(context.rig)
+        if conditions.motor_rpms:
+            context.observe_motor(conditions.motor_rpms[-1] > 0.0)
+        if recorder.next_sample_index >= first + count:
+            return first, conditions
+        _wait_rig_s(context, POLL_INTERVAL_S)
 
 
 def _record_point(
@@ -449,14 +499,14 @@ def _record_point(
     gaps: an overloaded link) is taken again, up to ``MAX_RETAKES`` times; what the kept record lost is journalled
     as ``samples_missing_in_record``. The recorder fills in the record's saturated and over-range row counts.
     """
-    rig, stream = context.rig, context.stream
+    stream = context.stream
     count = int(round(point.record_s * context.plan.sample_rate_hz))
     retakes = 0
-    first = _take_rows(context, recorder, count)
+    first, conditions = _take_rows(context, recorder, count)
     missing = stream.samples_missing_in_rows(first, count)
     while missing and retakes < MAX_RETAKES:
         retakes += 1
-        first = _take_rows(context, recorder, count)
+        first, conditions = _take_rows(context, recorder, count)
         missing = stream.samples_missing_in_rows(first, count)
     record = SetPointRecord(
         plan_point_index=point.index,
@@ -469,13 +519,13 @@ def _record_point(
         tail_attached=point.tail_attached,
         repeat_index=point.repeat,
         settle_time_s=settle_s,
-        motor_rpm_mean=rig.motor.read_rpm() if rig.motor is not None else None,
+        motor_rpm_mean=conditions.motor_rpm_mean(),
         extra={
             "sweep": point.sweep,
             "retakes": retakes,
             "samples_missing_in_record": missing,
-            "pitch_measured_rad": rig.read_pitch_rad(),
-            "tunnel_velocity_fan_m_s": rig.read_tunnel_velocity_m_s(),
+            **conditions.journal_values(),
+            **context.motor_log.journal_values(stream),
         },
     )
     recorder.complete_set_point(record)
@@ -513,6 +563,7 @@ def _run_tail_state(
             stream.stop()
             stream.start(plan.sample_rate_hz)
         stream.attach(recorder)
+        context.motor_log.start_run()
         try:
             for point in points:
                 if context.stop.requested:

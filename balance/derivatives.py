@@ -4,11 +4,13 @@ The clamped vehicle's cycle-averaged loads X, Z (N) and M (N m, positive nose-do
 
     L = L0 + Lu du + Lw dw + Lf df + (curvature along each sweep)
 
-by generalised (weighted) least squares over every tailed measurement of the configuration, where ``du = u - u0``,
-``dw = w - w0`` are the body velocities relative to the steady state (``u = -V cos theta``,
-``w = -V sin theta``, docs/frames.md) and ``df = f - f0``. The pitch sweep at constant V turns the velocity
-vector (mostly ``dw``), the velocity sweep stretches it (mostly ``du``): together they separate the u- and
-w-derivatives. The intercept L0 is the steady-state load.
+by generalised (weighted) least squares over every tailed measurement of the configuration, where ``du = u -
+u0``, ``dw = w - w0`` are the body velocities relative to the steady state (``u = -V cos theta``, ``w = -V sin
+theta``, docs/frames.md) and ``df = f - f0``. V and theta are those read during each record (the fan's velocity
+and the strut's pitch, averaged over the record) where the run has them: the fan reaches a set velocity only
+within the settle tolerance, and ``Zu`` times that offset is several of Z0's sigmas. The pitch sweep at constant
+V turns the velocity vector (mostly ``dw``), the velocity sweep stretches it (mostly ``du``): together they
+separate the u- and w-derivatives. The intercept L0 is the steady-state load.
 
 Curvature: over a sweep of +-0.25 m/s the loads are visibly non-linear, and a straight line through the points
 gives the chord, not the derivative at the steady state. When a sweep has k >= 2 distinct offsets, the powers
@@ -143,7 +145,9 @@ class StabilityDerivatives:
     diagnostics : dict
         :class:`LoadFitDiagnostics` by load symbol ``"X"``, ``"Z"``, ``"M"``.
     points : pandas.DataFrame
-        The fitted points: ``sweep``, ``theta_deg``, ``v_m_s``, ``f_set_hz``, ``du_m_s``, ``dw_m_s``, ``df_hz``.
+        The fitted points: ``sweep``, ``theta_deg``, ``v_m_s``, ``f_set_hz`` (set values),
+        ``theta_measured_deg``, ``v_measured_m_s`` (the conditions regressed on: read during the record, or the set
+        values for runs without readings), ``du_m_s``, ``dw_m_s``, ``df_hz``.
     condition_number : float
         Condition number of the design's derivative columns (du, dw, df), each scaled to unit length.
     variance_inflation : dict
@@ -316,8 +320,29 @@ def steady_state_of(points: pd.DataFrame) -> SteadyState:
     return SteadyState(math.radians(theta_deg), float(v_m_s), float(f_hz))
 
 
-def _sweep_coordinates(points: pd.DataFrame, steady: SteadyState) -> pd.DataFrame:
-    u, w = body_velocities(np.radians(points["theta_deg"].to_numpy()), points["v_m_s"].to_numpy())
+def measured_or_set(points: pd.DataFrame, measured: str, set_value: str) -> np.ndarray:
+    """The column ``measured`` where the table has it and it is finite, else the set value ``set_value``."""
+    values = points[set_value].to_numpy(dtype=float)
+    if measured not in points:
+        return values
+    readings = points[measured].to_numpy(dtype=float)
+    return np.where(np.isfinite(readings), readings, values)
+
+
+def _sweep_coordinates(
+    points: pd.DataFrame, steady: SteadyState, measured: bool = False
+) -> pd.DataFrame:
+    """Coordinates of the points about the steady state; ``measured``: at the pitch and velocity read during
+    each record (``theta_measured_deg``, ``v_measured_m_s``) where the table has them, else at the set values."""
+    theta_deg, v_m_s = (
+        (
+            measured_or_set(points, "theta_measured_deg", "theta_deg"),
+            measured_or_set(points, "v_measured_m_s", "v_m_s"),
+        )
+        if measured
+        else (points["theta_deg"].to_numpy(dtype=float), points["v_m_s"].to_numpy(dtype=float))
+    )
+    u, w = body_velocities(np.radians(theta_deg), v_m_s)
     du, dw = u - steady.u_m_s, w - steady.w_m_s
     # Unit vector of the steady-state stream in body axes is -(cos theta0, sin theta0).
     cos0, sin0 = math.cos(steady.theta_rad), math.sin(steady.theta_rad)
@@ -450,10 +475,13 @@ def fit_stability_derivatives(
         raise UserInputError("sweep table", "no tailed measurements to fit derivatives to")
     configuration = configuration or _configuration_name(points)
     steady = steady_state_of(points)
-    coordinates = _sweep_coordinates(points, steady)
-    variables, not_estimable = _estimable_variables(coordinates)
+    # What the sweeps can separate follows from their set points; the fit regresses on the conditions read
+    # during each record (the fan reaches a set velocity only within the settle tolerance and still creeps).
+    set_coordinates = _sweep_coordinates(points, steady)
+    variables, not_estimable = _estimable_variables(set_coordinates)
+    nuisance = _nuisance_terms(points, set_coordinates, max_sweep_order)
+    coordinates = _sweep_coordinates(points, steady, measured=True)
     derivative_design = coordinates[[_VARIABLE_COLUMNS[v] for v in variables]].to_numpy()
-    nuisance = _nuisance_terms(points, coordinates, max_sweep_order)
     design = _design(coordinates, variables, nuisance)
     if len(points) < design.shape[1]:
         raise UserInputError(
@@ -468,7 +496,14 @@ def fit_stability_derivatives(
         sigma={},
         diagnostics={},
         points=pd.concat(
-            [points[["sweep", "theta_deg", "v_m_s", "f_set_hz"]], coordinates], axis=1
+            [
+                points[["sweep", "theta_deg", "v_m_s", "f_set_hz"]].assign(
+                    theta_measured_deg=measured_or_set(points, "theta_measured_deg", "theta_deg"),
+                    v_measured_m_s=measured_or_set(points, "v_measured_m_s", "v_m_s"),
+                ),
+                coordinates,
+            ],
+            axis=1,
         ),
         condition_number=condition_number,
         variance_inflation=_variance_inflation(derivative_design, variables),

@@ -19,6 +19,7 @@ import pandas as pd
 
 from ornitail.acquisition.catalog import RunCatalog
 from ornitail.acquisition.sweep import previous_sweep_chain
+from ornitail.balance.condition_correction import at_reference_conditions
 from ornitail.balance.derivatives import StabilityDerivatives, fit_stability_derivatives
 from ornitail.balance.phase_loads import PhaseAveragedLoads, phase_averaged_loads
 from ornitail.balance.processing_plots import (
@@ -110,7 +111,10 @@ def _process_configuration(
 ) -> dict[str, Any]:
     written: list[Path] = []
     record: dict[str, Any] = {"configuration": name}
-    contribution = tail_contribution(table)
+    fit: StabilityDerivatives | None = None
+    if table["tailed"].astype(bool).any():
+        fit = fit_stability_derivatives(table, configuration=name)
+    contribution = tail_contribution(at_reference_conditions(table, fit))
     if "drift_model" in table:
         record["drift_statement"] = " ".join(
             part
@@ -129,9 +133,7 @@ def _process_configuration(
         written.append(path)
         record["tail_contribution"] = contribution.to_dict(orient="records")
         record["tail_statements"] = tail_contribution_statements(contribution)
-    fit: StabilityDerivatives | None = None
-    if table["tailed"].astype(bool).any():
-        fit = fit_stability_derivatives(table, configuration=name)
+    if fit is not None:
         csv_path, json_path = out / f"{slug}-derivatives.csv", out / f"{slug}-derivatives.json"
         fit.table().to_csv(csv_path, index=False)
         json_path.write_text(json.dumps(json_safe(fit.to_json_dict()), indent=2) + "\n")

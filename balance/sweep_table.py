@@ -27,6 +27,7 @@ from scipy.stats import chi2
 from ornitail.acquisition.counter_gaps import find_counter_gaps
 from ornitail.acquisition.recording_layout import SetPointRecord
 from ornitail.acquisition.recording_reader import Recording, load_recording
+from ornitail.balance.condition_correction import REFERENCE_COLUMNS
 from ornitail.balance.hall_cycles import HallEdgeSettings
 from ornitail.balance.point_covariance import point_covariance
 from ornitail.balance.point_loads import (
@@ -66,6 +67,8 @@ BALANCE_RESOLUTION_N = 0.149e-3 * 9.80665
 """Nano-17 force resolution, 0.149 gram-force (domain.md section 3), N."""
 REPEATABILITY_SIGNIFICANCE = 0.01
 """Chance of a false alarm of the repeatability check: repeats scatter beyond their errors below this p-value."""
+MEASURED_CONDITION_COLUMNS = ("v_measured_m_s", "theta_measured_deg")
+"""Columns of the conditions read during each record (tunnel velocity, m/s; pitch, deg)."""
 
 
 def balance_calibration_of(recording: Recording) -> AtiCalibration:
@@ -496,6 +499,7 @@ def table_of_points(
                 "theta_deg": math.degrees(float(row["pitch_rad"])),
                 "v_m_s": float(row["tunnel_velocity_m_s"]),
                 "f_set_hz": float(row["flapping_frequency_hz"]),
+                **measured_conditions_record(row),
                 "tare_id": point.tare_id,
                 **point.tare_columns(),
                 **{name: point.flags.get(name, -1) for name in SATURATION_COLUMNS},
@@ -508,6 +512,17 @@ def table_of_points(
         if on_point is not None:
             on_point(done, len(points))
     return pd.DataFrame(rows)
+
+
+def measured_conditions_record(row: pd.Series) -> dict[str, float]:
+    """The conditions read during the record (``v_measured_m_s``, ``theta_measured_deg``); NaN for runs
+    recorded before the sweep read them (and for manual recordings), whose set values then stand in."""
+    velocity = row.get("tunnel_velocity_mean_m_s", math.nan)
+    pitch = row.get("pitch_mean_rad", math.nan)
+    return {
+        "v_measured_m_s": math.nan if velocity is None else float(velocity),
+        "theta_measured_deg": math.nan if pitch is None else math.degrees(float(pitch)),
+    }
 
 
 def saturation_warnings(table: pd.DataFrame) -> list[str]:
@@ -567,6 +582,10 @@ def _pooled_repeats(group: pd.DataFrame, name: str) -> pd.Series:
             f"{name}_repeat_chi_square": chi_square,
             f"{name}_repeat_inflation": inflation,
             f"{name}_cycle_2sigma": float(group[f"{name}_2sigma"].mean()),
+            **{
+                column: float(group[column].mean()) if column in group else math.nan
+                for column in MEASURED_CONDITION_COLUMNS + REFERENCE_COLUMNS
+            },
             "repeats": count,
             "cycles": int(group["cycles"].sum()),
         }
@@ -609,6 +628,10 @@ def tail_contribution(table: pd.DataFrame) -> pd.DataFrame:
         first_load = pooled[state][BODY_LOAD_NAMES[0]].loc[common]
         result[f"repeats_{label}"] = first_load["repeats"].astype(int)
         result[f"cycles_{label}"] = first_load["cycles"].astype(int)
+        for column in MEASURED_CONDITION_COLUMNS:
+            result[f"{column}_{label}"] = first_load[column]
+    for column in REFERENCE_COLUMNS:
+        result[column] = pooled[True][BODY_LOAD_NAMES[0]].loc[common, column]
     for name in BODY_LOAD_NAMES:
         tailed, tailless = pooled[True][name].loc[common], pooled[False][name].loc[common]
         difference = tailed[name] - tailless[name]

@@ -8,10 +8,13 @@ the tare before and the tare after it:
     V0(t) = (1 - lambda) V_before + lambda V_after,   lambda = (t - t_before) / (t_after - t_before)
 
 in the rig's running time t: the time the motor ran, counted on the run's sample counter (one continuous stream
-per run) from the end of each tare record to the end of the last measurement record before the next tare (the
-motor is on from the first measurement's settling to the wind-off before a tare, off from then through the tare's
-record). The balance warms and creeps while the rig runs, not while it stands for a tare: counted in wall time, the
-wind-off and the tare's record (a tenth of a block, and more of a short one) would take a share of the drift that
+per run). The sweep journals when the motor started and stopped (``motor_transitions``: its speed read every 0.1
+s of rig time while settling and recording; a motor told to stop keeps turning for seconds, and counting from
+the stop command left every bracketing tare a few seconds of warm-up later than the clock said, ~0.3 mN in X on
+the simulated rig). Runs recorded without it count from the end of each tare record to the end of the last
+measurement record before the next tare. The balance warms and creeps while the rig runs, not while it stands
+for a tare: counted in wall time, the wind-off and the tare's record (a tenth of a block, and more of a short
+one) would take a share of the drift that
 happened while the motor ran. The two tares' errors are independent, so the covariance of V0 is
 ``(1 - lambda)^2 C_before + lambda^2 C_after``; points that share a tare share its error in proportion to
 their weights on it (``balance.point_covariance``). Without a tare after the point in the
@@ -33,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import chi2
 
+from ornitail.acquisition.motor_running_log import MOTOR_TRANSITIONS_KEY
 from ornitail.acquisition.recording_layout import SetPointRecord
 
 DRIFT_MODEL_LINEAR = "linear in running time (motor on) between bracketing tares"
@@ -68,6 +72,24 @@ class RunningClock:
             intervals.append((start, last_measurement_end))
         self.intervals = intervals
 
+    @classmethod
+    def from_motor_transitions(
+        cls, transitions: list[tuple[str, float]], end_sample_index: float
+    ) -> RunningClock:
+        """The clock from the motor's journalled changes (``("started" | "stopped", row index)``, any order);
+        a motor still running at the run's end runs to ``end_sample_index``."""
+        clock = cls([])
+        start: float | None = None
+        for kind, row in sorted(transitions, key=lambda transition: transition[1]):
+            if kind == "started" and start is None:
+                start = float(row)
+            elif kind == "stopped" and start is not None:
+                clock.intervals.append((start, float(row)))
+                start = None
+        if start is not None:
+            clock.intervals.append((start, float(end_sample_index)))
+        return clock
+
     def at(self, sample_index: float) -> float:
         """Running time up to ``sample_index``, samples."""
         return float(sum(max(0.0, min(sample_index, end) - begin) for begin, end in self.intervals))
@@ -92,7 +114,15 @@ def middle_sample_index(record: SetPointRecord) -> float:
 
 
 def running_clock_of(records: list[SetPointRecord]) -> RunningClock:
-    """The running clock of a run from its set-point records."""
+    """The running clock of a run from its set-point records: from the motor's changes between standing and
+    running where the sweep journalled them (``motor_transitions``; the motor spins down for seconds after it is
+    told to stop, and warms the balance meanwhile), else from the records alone (:class:`RunningClock`)."""
+    journalled = [record.extra.get(MOTOR_TRANSITIONS_KEY) for record in records]
+    if records and all(transitions is not None for transitions in journalled):
+        return RunningClock.from_motor_transitions(
+            [(kind, row) for transitions in journalled for kind, row in transitions],
+            max(record.last_sample_index for record in records),
+        )
     return RunningClock(
         [
             (record.kind == "tare", record.first_sample_index, record.last_sample_index)

@@ -30,7 +30,6 @@ from ornitail.acquisition.sweep_cli import (
 )
 from ornitail.balance.point_loads import BODY_LOAD_NAMES
 from ornitail.balance.process_runs import process_runs
-from ornitail.balance.sweep_table import tail_contribution
 from ornitail.core.demo_design import design_from_simulated_campaign
 from ornitail.core.output import emit, json_option
 from ornitail.design.propose_cli import render_proposal
@@ -61,6 +60,16 @@ def _compared(estimate: float, sigma: float, truth: float, unit: str) -> dict[st
     }
 
 
+def _reference_or_set(contribution: dict[str, Any], reference: str, set_value: str) -> float:
+    """The condition the repeats were moved to where the table has one, else the set value."""
+    value = contribution.get(reference)
+    return (
+        float(value)
+        if value is not None and math.isfinite(value)
+        else float(contribution[set_value])
+    )
+
+
 def truth_comparison(
     table: pd.DataFrame,
     contribution: dict[str, Any],
@@ -69,18 +78,25 @@ def truth_comparison(
 ) -> dict[str, dict[str, Any]]:
     """The demo's tail contribution, steady-state loads (X0, Z0, M0) and derivatives against the simulator's
     truth for the same configuration and point (:func:`ornitail.sim.tunnel_truth.tunnel_truth`, the simulated
-    rig's reference point); each entry with the error in the estimate's own sigmas."""
+    rig's reference point); each entry with the error in the estimate's own sigmas.
+
+    The tail's contribution is compared at the condition its repeats were moved to (the tailless repeats' pitch
+    and velocity read during their records, :mod:`ornitail.balance.condition_correction`: the fan settles within
+    its tolerance, not on the set value); X0, Z0, M0 and the derivatives at the set steady state, which the fit's
+    intercept refers to."""
     configuration = study_configuration(
         str(table["tail_id"].iloc[0]), float(table["x_h_mm"].iloc[0])
     )
     transform = read_rig_file(DEFAULT_RIG_FILE).tool_transform
-    tail_point = (
-        math.radians(contribution["theta_deg"]),
-        contribution["v_m_s"],
-        contribution["f_set_hz"],
-    )
     with_tail, without = (
-        tunnel_truth(configuration, *tail_point, tail_attached=state, reference_transform=transform)
+        tunnel_truth(
+            configuration,
+            math.radians(_reference_or_set(contribution, "theta_reference_deg", "theta_deg")),
+            _reference_or_set(contribution, "v_reference_m_s", "v_m_s"),
+            contribution["f_set_hz"],
+            tail_attached=state,
+            reference_transform=transform,
+        )
         for state in (True, False)
     )
     compared = {
@@ -240,10 +256,10 @@ def demo_command(data_root: Path | None, time_scale: float, as_json: bool) -> No
         processed = process_runs(sweep.run_directories, folder)
         table = pd.read_csv(processed["table_csv"])
         result["steady_state"] = _steady_state_summary(table)
-        contribution = tail_contribution(table)
+        configuration = processed["configurations"][0]
+        contribution = pd.DataFrame(configuration.get("tail_contribution", []))
         if len(contribution):
             result["tail_contribution"] = contribution.iloc[0].to_dict()
-        configuration = processed["configurations"][0]
         result["drift_statement"] = configuration.get("drift_statement", "")
         derivatives = configuration.get("derivatives", {})
         result["derivatives"] = derivatives.get("derivatives", {})

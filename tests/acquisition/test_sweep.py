@@ -71,9 +71,22 @@ def test_sweep_records_every_point_in_two_runs_with_tares(simulated_rig, tmp_pat
     assert (rows == 6000).all()  # 0.6 s at 10 kHz
     # The stream never pauses: no counter gaps, nothing lost, on the simulated link.
     assert tailed.counter_gaps() == []
-    # The rig reached each set point: measured pitch within the settle tolerance.
+    # The rig reached each set point: pitch and velocity read during the record (their means over ~6 readings,
+    # one per 0.1 s of rig time) within the settle tolerances.
     for _, row in frame.iterrows():
-        assert abs(row["pitch_measured_rad"] - row["pitch_rad"]) <= math.radians(0.2)
+        assert row["condition_readings"] >= 5
+        assert abs(row["pitch_mean_rad"] - row["pitch_rad"]) <= math.radians(0.2)
+        assert abs(row["tunnel_velocity_mean_m_s"] - row["tunnel_velocity_m_s"]) <= 0.02
+    # The motor's starts and stops are journalled where they were read: it starts for each measurement after a
+    # tare and stops (spinning down) before each tare's record ends.
+    transitions = [
+        (row["kind"], [kind for kind, _ in row["motor_transitions"]]) for _, row in frame.iterrows()
+    ]
+    for (kind, _), (next_kind, next_changes) in zip(transitions[:-1], transitions[1:], strict=True):
+        if kind == "tare" and next_kind == "measurement":
+            assert next_changes == ["started"], transitions
+        if kind == "measurement" and next_kind == "tare":
+            assert next_changes == ["stopped"], transitions
     # Motor and fan were left off.
     assert motor_spins_down(simulated_rig)
     assert simulated_rig.read_tunnel_velocity_m_s() < 0.8

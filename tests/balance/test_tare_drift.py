@@ -3,6 +3,8 @@
 import numpy as np
 import pytest
 
+from ornitail.acquisition.motor_running_log import MOTOR_TRANSITIONS_KEY
+from ornitail.acquisition.recording_layout import SetPointRecord
 from ornitail.balance.point_covariance import weighted_tare_covariance
 from ornitail.balance.sweep_table import third_tare
 from ornitail.balance.tare_drift import (
@@ -13,6 +15,7 @@ from ornitail.balance.tare_drift import (
     RunningClock,
     drift_check,
     drift_statement,
+    running_clock_of,
     tare_correction,
 )
 
@@ -168,3 +171,49 @@ def test_fewer_than_three_tares_at_a_pitch_leave_straight_drift_untested():
     check = drift_check("r", [_tares_on(lambda t: 0 * GAUGE_RATES, TIMES[:2])])
     assert check.p_value == 1.0 and not check.straight_drift_rejected
     assert "straight drift not tested" in check.statement()
+
+
+def test_the_running_clock_follows_the_motors_journalled_starts_and_stops():
+    """The motor read running from sample 150 and standing again from 950 (it spun down into the next tare's
+    settling); started again at 1050 and still running at the run's last sample, 1599."""
+    records = [
+        SetPointRecord(0, "tare", 0, 99, 0.4, 0.0, 0.0, False, extra={MOTOR_TRANSITIONS_KEY: []}),
+        SetPointRecord(
+            1,
+            "measurement",
+            300,
+            399,
+            0.4,
+            0.8,
+            13.5,
+            False,
+            extra={MOTOR_TRANSITIONS_KEY: [["started", 150]]},
+        ),
+        SetPointRecord(
+            2,
+            "tare",
+            1000,
+            1099,
+            0.4,
+            0.0,
+            0.0,
+            False,
+            extra={MOTOR_TRANSITIONS_KEY: [["stopped", 950]]},
+        ),
+        SetPointRecord(
+            3,
+            "measurement",
+            1500,
+            1599,
+            0.4,
+            0.8,
+            13.5,
+            False,
+            extra={MOTOR_TRANSITIONS_KEY: [["started", 1050]]},
+        ),
+    ]
+    assert running_clock_of(records).intervals == [(150.0, 950.0), (1050.0, 1599.0)]
+    # A journal without the transitions (recorded before the sweep read them) falls back to the records.
+    for record in records:
+        record.extra.clear()
+    assert running_clock_of(records).intervals == [(99.0, 399.0), (1099.0, 1599.0)]

@@ -1,0 +1,61 @@
+"""When the flapping motor started and stopped, as rows of the balance stream: the clock of the balance's drift.
+
+A Nano-17 next to the DelFly's motor warms while the motor runs, so processing interpolates the gauge zero
+between wind-off tares in running time (:mod:`ornitail.balance.tare_drift`). The motor keeps turning for a while
+after it is told to stop (the simulated motor ~2.5 s; a real one its own spin-down), so the moments the sweep
+commands it are not the moments it runs. The sweep reads the motor's speed every poll while settling and
+recording; this log keeps each change between standing (0 rpm read) and running, on the stream's rows.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+MOTOR_TRANSITIONS_KEY = "motor_transitions"
+"""Journal key (a set point's ``extra``): ``[["started" | "stopped", row index], ...]`` since the previous point."""
+
+
+class _RowLocator(Protocol):
+    def first_row_sampled_after(self, samples_since_start: int) -> int | None: ...
+
+
+class MotorRunningLog:
+    """Changes of the motor between standing and running, read at the sweep's polls.
+
+    A change is seen at the first poll after it (polls are 0.1 s of rig time apart), at the balance's sample
+    count then; it becomes a row index once that sample has been recorded.
+    """
+
+    def __init__(self) -> None:
+        self.running = False
+        self._unplaced: list[tuple[str, int]] = []
+        self._placed: list[list[str | int]] = []
+
+    def start_run(self) -> None:
+        """A new run (a new recorder, so new row indices): forget unplaced changes; a motor already running
+        is journalled as started at the run's first row."""
+        self._unplaced.clear()
+        self._placed = [["started", 0]] if self.running else []
+
+    def observe(self, running: bool, samples_since_start: int, stream: _RowLocator) -> None:
+        """One reading of the motor (running: it read a speed above 0) taken when the board had sampled
+        ``samples_since_start``."""
+        if running != self.running:
+            self.running = running
+            self._unplaced.append(("started" if running else "stopped", samples_since_start))
+        self._place(stream)
+
+    def _place(self, stream: _RowLocator) -> None:
+        while self._unplaced:
+            kind, samples = self._unplaced[0]
+            row = stream.first_row_sampled_after(samples)
+            if row is None:
+                return
+            self._placed.append([kind, row])
+            self._unplaced.pop(0)
+
+    def journal_values(self, stream: _RowLocator) -> dict[str, list[list[str | int]]]:
+        """The changes placed since the last call, for a set point's ``extra``; they are then forgotten."""
+        self._place(stream)
+        placed, self._placed = self._placed, []
+        return {MOTOR_TRANSITIONS_KEY: placed}
