@@ -27,7 +27,6 @@ from ornitail.acquisition.recording_layout import (
     RUNS_FOLDER_NAME,
     SAMPLES_FILE_NAME,
 )
-from ornitail.acquisition.recording_reader import load_recording
 from ornitail.acquisition.run_files import read_json_file, run_is_live
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import check_input_file
@@ -437,6 +436,9 @@ class RunCatalog:
             return None  # a crashed run is never reopened: its row is final
         if existing is not None and run_is_live(run_directory):
             return None
+        # Imported here (h5py, pandas): listing runs and `ornitail --help` need neither.
+        from ornitail.acquisition.recording_reader import load_recording
+
         recording = load_recording(run_directory)
         return catalog_entry_from_run_metadata(recording.effective_metadata, relative)
 

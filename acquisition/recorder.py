@@ -42,6 +42,10 @@ from typing import Any
 import h5py
 import numpy as np
 
+from ornitail.acquisition.calibration_copies import (
+    calibration_copy_names,
+    write_calibration_copies,
+)
 from ornitail.acquisition.catalog import utc_now_iso
 from ornitail.acquisition.catalog_sync import CatalogUpdater
 from ornitail.acquisition.counter_gaps import find_counter_gaps
@@ -72,7 +76,8 @@ from ornitail.acquisition.recording_layout import (
 from ornitail.acquisition.recording_reader import MAX_STORED_GAP_POSITIONS, set_point_saturation
 from ornitail.acquisition.run_files import RunLock, append_journal_line, write_json_atomically
 from ornitail.core.errors import UserInputError
-from ornitail.core.hashing import content_hash_of_file
+from ornitail.core.hashing import content_hash_of_bytes
+from ornitail.core.input_files import read_input_bytes
 
 TARGET_CHUNK_BYTES = 256 * 1024
 WRITER_STOP_TIMEOUT_S = 60.0
@@ -200,7 +205,8 @@ class Recorder:
     rig_description : mapping, optional
         JSON-serialisable description of the rig (devices, ports, firmware, ...).
     calibration_files : mapping of str to path, optional
-        Label -> calibration file; each is hashed (sha256) into the metadata.
+        Label -> calibration file; each is hashed (sha256) into the metadata and copied into
+        ``<run>/calibration/`` at start (``docs/recordings.md``, "Calibration files").
     bias_voltages_v : mapping of str to float, optional
         Channel name -> bias voltage (V) known at start; see :meth:`update_bias_voltages`.
     queue_capacity_blocks : int
@@ -240,10 +246,18 @@ class Recorder:
         self._counter_dtype = np.dtype(stream.counter_dtype)
         self._rig_description = dict(rig_description or {})
         _require_json_serialisable("rig_description", self._rig_description)
-        self._calibration_files = {
-            label: {"path": str(Path(path).resolve()), "hash": content_hash_of_file(path)}
-            for label, path in (calibration_files or {}).items()
-        }
+        calibration_paths = {label: Path(path) for label, path in (calibration_files or {}).items()}
+        copy_names = calibration_copy_names(calibration_paths)
+        self._calibration_copies: dict[str, bytes] = {}
+        self._calibration_files: dict[str, dict[str, str]] = {}
+        for label, path in calibration_paths.items():
+            content = read_input_bytes(path)  # read once: the copy is exactly what was hashed
+            self._calibration_copies[copy_names[label]] = content
+            self._calibration_files[label] = {
+                "path": str(path.resolve()),
+                "hash": content_hash_of_bytes(content),
+                "copy": copy_names[label],
+            }
         self._metadata_lock = threading.Lock()
         self._bias_voltages_v: dict[str, float] = {}
         if bias_voltages_v:
@@ -493,6 +507,7 @@ class Recorder:
         self.run_directory.mkdir(parents=True, exist_ok=False)
         self._run_lock.acquire()
         try:
+            write_calibration_copies(self.run_directory, self._calibration_copies)
             self._write_metadata(EXIT_STATUS_RUNNING, None, None)
             if self._register_in_catalog:
                 self._catalog_updater = CatalogUpdater(

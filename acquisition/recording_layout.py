@@ -7,6 +7,7 @@ One recording is one run directory (see ``docs/recordings.md``)::
         samples.h5      raw samples, sample counters, per-set-point table (HDF5)
         journal.jsonl   one JSON line per completed set point, fsynced (what a resume reads)
         run.lock        held (flock) by the recording process while it lives
+        calibration/    copies of the calibration files the run was recorded with
 
 All values are SI; angles in radians.
 """
@@ -27,6 +28,7 @@ RUN_METADATA_FILE_NAME = "run.json"
 SAMPLES_FILE_NAME = "samples.h5"
 JOURNAL_FILE_NAME = "journal.jsonl"
 RUN_LOCK_FILE_NAME = "run.lock"
+CALIBRATION_FOLDER_NAME = "calibration"
 
 HDF5_RAW_SAMPLES_PATH = "/samples/raw"
 HDF5_SAMPLE_COUNTER_PATH = "/samples/counter"

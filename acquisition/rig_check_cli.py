@@ -9,13 +9,17 @@ from __future__ import annotations
 import dataclasses
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
-from ornitail.acquisition.rig_check import STATUS_FAILED, STATUS_IN_USE, RigCheck, check_rig
-from ornitail.acquisition.sweep_cli import EXIT_BUSY, EXIT_FAILED
 from ornitail.core.output import emit, json_option
+
+if TYPE_CHECKING:
+    from ornitail.acquisition.rig_check import RigCheck
+
+# The rig check and the sweep command import numpy, python-can and pyserial: imported where used, so that
+# `ornitail rig --help` stays fast.
 
 
 def rig_check_record(check: RigCheck) -> dict[str, Any]:
@@ -34,6 +38,9 @@ def rig_check_record(check: RigCheck) -> dict[str, Any]:
 
 def rig_check_exit_code(check: RigCheck) -> int:
     """0 every instrument ok, 3 any failed, else 5 when a port is held by another process."""
+    from ornitail.acquisition.rig_check import STATUS_FAILED, STATUS_IN_USE
+    from ornitail.acquisition.sweep_cli import EXIT_BUSY, EXIT_FAILED
+
     statuses = {instrument.status for instrument in check.instruments}
     if STATUS_FAILED in statuses:
         return EXIT_FAILED
@@ -47,6 +54,8 @@ def _value_text(value: float | int | bool) -> str:
 
 
 def _result_text(instrument: dict[str, Any]) -> str:
+    from ornitail.acquisition.rig_check import STATUS_IN_USE
+
     if instrument["status"] != "ok":
         word = "in use" if instrument["status"] == STATUS_IN_USE else "failed"
         return f"{word}: {instrument['problem']} (set by {instrument['rig_file_key']})"
@@ -99,6 +108,8 @@ def rig_check_command(rig_path: Path, as_json: bool) -> None:
     """List the serial ports and CAN channels found, then connect each instrument of the rig file RIG in turn:
     identify it, read one sample, bring it to its safe state, disconnect. Nothing moves. Exit codes: 0 all ok,
     2 rig file error, 3 an instrument failed, 5 a port is in use by another process."""
+    from ornitail.acquisition.rig_check import check_rig
+
     check = check_rig(rig_path)
     emit(rig_check_record(check), as_json, _render)
     sys.exit(rig_check_exit_code(check))

@@ -9,8 +9,7 @@ from typing import Any
 
 import click
 
-from ornitail.acquisition.catalog import default_data_root
-from ornitail.balance.process_runs import newest_sweep_chain, process_runs
+from ornitail.acquisition.calibration_copies import CalibrationSources
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import prepare_output_directory
 from ornitail.core.output import emit, json_option
@@ -91,6 +90,22 @@ def _render(result: dict[str, Any]) -> str:
     help="Process set points whose record or tare has samples at the ADC limit or over the sensor's "
     "rated load (refused by default), flagged in the table and named in the warnings.",
 )
+@click.option(
+    "--search-path",
+    "search_path",
+    multiple=True,
+    type=click.Path(exists=True, file_okay=False, path_type=Path),
+    help="Folder to search (not its subfolders) for a balance calibration file with the content a run was "
+    "recorded with, when neither the run folder's copy nor the recorded path has it. Repeatable.",
+)
+@click.option(
+    "--cal",
+    "calibration_override",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Balance calibration file to use for every run instead of the recorded one; a file whose content "
+    "differs from the recorded one is used with a warning.",
+)
 @json_option
 def process_command(
     runs: tuple[Path, ...],
@@ -98,9 +113,14 @@ def process_command(
     data_root: Path | None,
     out: Path,
     keep_saturated: bool,
+    search_path: tuple[Path, ...],
+    calibration_override: Path | None,
     as_json: bool,
 ) -> None:
     """Cycle-average recorded runs; write tail contribution, stability derivatives and figures."""
+    from ornitail.acquisition.catalog import default_data_root  # imported here: --help stays fast
+    from ornitail.balance.process_runs import newest_sweep_chain, process_runs
+
     if runs and plan_name:
         raise UserInputError("--plan", "give run directories or --plan, not both")
     prepare_output_directory(out)
@@ -110,7 +130,14 @@ def process_command(
     progress = _DelayedProgress()
     try:
         result = process_runs(
-            run_directories, out, on_progress=progress, keep_saturated=keep_saturated
+            run_directories,
+            out,
+            on_progress=progress,
+            keep_saturated=keep_saturated,
+            calibration_sources=CalibrationSources(
+                search_path=search_path,
+                overrides={} if calibration_override is None else {"balance": calibration_override},
+            ),
         )
     finally:
         progress.close()

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ornitail.acquisition.calibration_copies import CalibrationSources
 from ornitail.acquisition.catalog import RunCatalog
 from ornitail.acquisition.sweep import previous_sweep_chain
 from ornitail.balance.condition_correction import at_reference_conditions
@@ -172,30 +173,36 @@ def process_runs(
     out: Path,
     on_progress: Callable[[int, int], None] | None = None,
     keep_saturated: bool = False,
+    calibration_sources: CalibrationSources | None = None,
 ) -> dict[str, Any]:
     """Write every table and figure of ``ornitail process`` for these runs into ``out``; return the summary.
 
     Records with saturated or over-range samples are refused unless ``keep_saturated``; then they are processed,
-    flagged in the table's saturation columns and named in ``warnings``.
+    flagged in the table's saturation columns and named in ``warnings``. Each run's balance calibration file is
+    found by its recorded content hash (run folder copy, recorded path, then ``calibration_sources.search_path``)
+    unless ``calibration_sources.overrides["balance"]`` names the file to use; an override with other content is
+    used and named in ``warnings``.
 
     Returns
     -------
     dict
-        ``runs``, ``table_csv``, ``warnings`` (frequency cross-check), ``configurations`` (one record each:
-        ``derivatives`` with sigma, ``tail_contribution``, ``tail_statements``, ``written``), ``written``.
+        ``runs``, ``table_csv``, ``calibration_files`` (run id -> ``{path, source}`` of the balance calibration
+        used), ``warnings`` (overridden calibration, saturation, frequency cross-check), ``configurations`` (one
+        record each: ``derivatives`` with sigma, ``tail_contribution``, ``tail_statements``, ``written``),
+        ``written``.
 
     Raises
     ------
     UserInputError
-        If no runs are given, a directory is not a recording, a measurement has no tare, a calibration file is
-        missing or changed, a record lost samples or (unless ``keep_saturated``) has saturated or over-range
-        samples, or a record holds too few flapping cycles.
+        If no runs are given, a directory is not a recording, a measurement has no tare, no file with the
+        recorded balance calibration's content is found, a record lost samples or (unless ``keep_saturated``)
+        has saturated or over-range samples, or a record holds too few flapping cycles.
     """
     if not run_directories:
         raise UserInputError(
             "runs", "no run directories given (pass run directories or --plan NAME)"
         )
-    points = measured_set_points(run_directories, keep_saturated)
+    points = measured_set_points(run_directories, keep_saturated, calibration_sources)
     if not points:
         raise UserInputError(
             ", ".join(str(path) for path in run_directories), "the runs hold no measured set points"
@@ -205,10 +212,23 @@ def process_runs(
     out.mkdir(parents=True, exist_ok=True)
     table_path = out / CYCLE_AVERAGES_FILE
     table.to_csv(table_path, index=False)
+    calibration_files = {
+        point.recording.run_id: point.calibration_file
+        for point in points
+        if point.calibration_file is not None
+    }
     result: dict[str, Any] = {
         "runs": [str(path) for path in run_directories],
         "table_csv": str(table_path),
-        "warnings": saturation_warnings(table) + frequency_check_warnings(table),
+        "calibration_files": {
+            run_id: {"path": str(resolved.path), "source": resolved.source}
+            for run_id, resolved in calibration_files.items()
+        },
+        "warnings": [
+            resolved.warning for resolved in calibration_files.values() if resolved.warning
+        ]
+        + saturation_warnings(table)
+        + frequency_check_warnings(table),
         "configurations": [],
     }
     written = [str(table_path)]

@@ -24,6 +24,11 @@ import numpy as np
 import pandas as pd
 from scipy.stats import chi2
 
+from ornitail.acquisition.calibration_copies import (
+    CalibrationSources,
+    ResolvedCalibrationFile,
+    resolve_calibration_file,
+)
 from ornitail.acquisition.counter_gaps import find_counter_gaps
 from ornitail.acquisition.recording_layout import SetPointRecord
 from ornitail.acquisition.recording_reader import Recording, load_recording
@@ -54,7 +59,6 @@ from ornitail.calibration.flapping_frequency_check import (
 )
 from ornitail.calibration.tool_transform import ToolTransform
 from ornitail.core.errors import UserInputError
-from ornitail.core.hashing import content_hash_of_file
 
 GAUGE_CHANNELS = tuple(f"gauge_{index}_v" for index in range(6))
 SATURATION_COLUMNS = (
@@ -71,23 +75,19 @@ MEASURED_CONDITION_COLUMNS = ("v_measured_m_s", "theta_measured_deg")
 """Columns of the conditions read during each record (tunnel velocity, m/s; pitch, deg)."""
 
 
-def balance_calibration_of(recording: Recording) -> AtiCalibration:
-    """The calibration the run names, with the rig's tool transform; refuses a changed calibration file."""
-    files = recording.metadata.get("calibration_files", {})
-    entry = files.get("balance")
-    where = f"{recording.run_directory / 'run.json'}: calibration_files.balance"
-    if not entry:
-        raise UserInputError(where, "the run names no balance calibration")
-    path = Path(entry["path"])
-    if content_hash_of_file(path) != entry["hash"]:
-        raise UserInputError(
-            str(path),
-            f"content differs from the calibration run {recording.run_id} was recorded with",
-        )
+def balance_calibration_of(
+    recording: Recording, sources: CalibrationSources | None = None
+) -> tuple[AtiCalibration, ResolvedCalibrationFile]:
+    """The balance calibration the run was recorded with (found by content hash, or the user's override in
+    ``sources``) with the rig's tool transform, and where it was found."""
+    resolved = resolve_calibration_file(
+        recording.run_directory, recording.metadata, "balance", sources
+    )
     transform_values = recording.metadata.get("rig", {}).get("tool_transform_mm_deg", [0.0] * 6)
-    return AtiCalibration.from_file(path).with_tool_transform(
+    calibration = AtiCalibration.from_file(resolved.path).with_tool_transform(
         ToolTransform.from_mm_deg(*transform_values)
     )
+    return calibration, resolved
 
 
 @dataclass(frozen=True)
@@ -122,6 +122,8 @@ class MeasuredSetPoint:
     tare : TareCorrection, optional
         The tare before the point and, when the plan bracketed it, the tare after it with its weight; then
         ``tare_volts`` and ``tare_volts_covariance`` are the interpolated zero and its covariance.
+    calibration_file : ResolvedCalibrationFile, optional
+        Where the balance calibration file was found (and the warning of an override with other content).
     """
 
     recording: Recording
@@ -133,6 +135,7 @@ class MeasuredSetPoint:
     flags: dict[str, int] = field(default_factory=dict)
     tare: TareCorrection | None = None
     drift_check: DriftCheck | None = None
+    calibration_file: ResolvedCalibrationFile | None = None
 
     def tare_columns(self) -> dict[str, float | str]:
         """``tare_after_id``, ``tare_after_weight``, ``drift_model`` and, per body load, the standard error of
@@ -346,7 +349,9 @@ def third_tare(
 
 
 def measured_set_points(
-    run_directories: Iterable[Path | str], keep_saturated: bool = False
+    run_directories: Iterable[Path | str],
+    keep_saturated: bool = False,
+    calibration_sources: CalibrationSources | None = None,
 ) -> list[MeasuredSetPoint]:
     """Every measured set point of the given runs in recording order, each paired with its tare.
 
@@ -357,15 +362,19 @@ def measured_set_points(
     keep_saturated : bool
         Keep records with saturated or over-range samples (their counts go to :attr:`MeasuredSetPoint.flags`)
         instead of refusing them.
+    calibration_sources : CalibrationSources, optional
+        Search folders and overrides for the balance calibration file (besides the run folder's copy and the
+        recorded path; :func:`~ornitail.acquisition.calibration_copies.resolve_calibration_file`).
 
     Raises
     ------
     UserInputError
-        If a measurement has no earlier tare at its pitch and tail state, a calibration file changed, or (unless
+        If a measurement has no earlier tare at its pitch and tail state, no file with the recorded balance
+        calibration's content is found, or (unless
         ``keep_saturated``) a measurement or tare has saturated or over-range samples.
     """
     points = _recorded_points(Path(directory) for directory in run_directories)
-    calibrations: dict[str, AtiCalibration] = {}
+    calibrations: dict[str, tuple[AtiCalibration, ResolvedCalibrationFile]] = {}
     clocks: dict[str, RunningClock] = {}
     for point in points:
         run_id = point.recording.run_id
@@ -402,7 +411,8 @@ def measured_set_points(
         after_position = _next_tare_in_run(points, position, key)
         after = None if after_position is None else recorded_tares[after_position]
         if run_id not in calibrations:
-            calibrations[run_id] = balance_calibration_of(point.recording)
+            calibrations[run_id] = balance_calibration_of(point.recording, calibration_sources)
+        calibration, calibration_file = calibrations[run_id]
         check = checks.get(run_id)
         third = None
         if after is not None and check is not None and check.straight_drift_rejected:
@@ -417,11 +427,12 @@ def measured_set_points(
                 row,
                 correction.volts,
                 correction.volts_covariance,
-                calibrations[run_id],
+                calibration,
                 before.tare_id,
                 flags,
                 correction,
                 check,
+                calibration_file,
             )
         )
     return measured

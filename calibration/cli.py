@@ -5,28 +5,14 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
-import numpy as np
 
-from ornitail.calibration.ati_cal_file import AXIS_NAMES
-from ornitail.calibration.ati_calibration import (
-    WRENCH_COMPONENT_NAMES,
-    WRENCH_COMPONENT_UNITS,
-    AtiCalibration,
-)
-from ornitail.calibration.hotwire_fit import (
-    DEFAULT_POLYNOMIAL_ORDER,
-    fit_kings_law,
-    fit_polynomial_law,
-)
-from ornitail.calibration.hotwire_laws import KingsLaw, save_hotwire_law
-from ornitail.calibration.hotwire_points import read_hotwire_points
-from ornitail.calibration.number_lists import parse_comma_separated_numbers
-from ornitail.calibration.thermocouple_amplifier import CELSIUS_TO_KELVIN_OFFSET
-from ornitail.calibration.tool_transform import parse_tool_transform_option
-from ornitail.calibration.tunnel_table import TunnelVelocityTable
+from ornitail.calibration.hotwire_fit import DEFAULT_POLYNOMIAL_ORDER
 from ornitail.core.errors import UserInputError, require_finite
 from ornitail.core.input_files import prepare_output_file
 from ornitail.core.output import emit, json_option
+
+# The calibration modules are imported inside the commands (only hotwire_fit's default is needed above, and with
+# it numpy): `ornitail calibration --help` stays fast.
 
 DEFAULT_WIRE_TEMPERATURE_C = 250.0
 MAX_WIRE_TEMPERATURE_C = 1000.0
@@ -58,6 +44,16 @@ def convert_command(
     cal_path: Path, volts: str, bias: str, tool_transform: str, as_json: bool
 ) -> None:
     """Convert six raw gauge voltages to forces (N) and torques (N m)."""
+    import numpy as np
+
+    from ornitail.calibration.ati_calibration import (
+        WRENCH_COMPONENT_NAMES,
+        WRENCH_COMPONENT_UNITS,
+        AtiCalibration,
+    )
+    from ornitail.calibration.number_lists import parse_comma_separated_numbers
+    from ornitail.calibration.tool_transform import parse_tool_transform_option
+
     calibration = AtiCalibration.from_file(cal_path).with_tool_transform(
         parse_tool_transform_option(tool_transform)
     )
@@ -89,6 +85,9 @@ def convert_command(
 @json_option
 def show_command(cal_path: Path, as_json: bool) -> None:
     """Show an ATI calibration: serial, units, SI matrix, rated ranges and content hash."""
+    from ornitail.calibration.ati_cal_file import AXIS_NAMES
+    from ornitail.calibration.ati_calibration import WRENCH_COMPONENT_UNITS, AtiCalibration
+
     summary = AtiCalibration.from_file(cal_path).summary()
 
     def render(values: dict) -> str:
@@ -162,6 +161,11 @@ def hotwire_fit_command(
     as_json: bool,
 ) -> None:
     """Fit King's law or a polynomial to hot-wire calibration points; report residuals."""
+    from ornitail.calibration.hotwire_fit import fit_kings_law, fit_polynomial_law
+    from ornitail.calibration.hotwire_laws import KingsLaw, save_hotwire_law
+    from ornitail.calibration.hotwire_points import read_hotwire_points
+    from ornitail.calibration.thermocouple_amplifier import CELSIUS_TO_KELVIN_OFFSET
+
     for option, value in (
         ("--wire-temperature-c", wire_temperature_c),
         ("--reference-temperature-c", reference_temperature_c),
@@ -269,6 +273,8 @@ def tunnel_command(
     table_path: Path, fan_rpm: float | None, velocity_m_s: float | None, as_json: bool
 ) -> None:
     """Convert fan rpm to jet velocity, or a wanted velocity to the fan rpm set point."""
+    from ornitail.calibration.tunnel_table import TunnelVelocityTable
+
     if (fan_rpm is None) == (velocity_m_s is None):
         raise UserInputError("--rpm/--velocity-m-s", "give exactly one of the two")
     table = TunnelVelocityTable.from_csv(table_path)

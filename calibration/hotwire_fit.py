@@ -16,7 +16,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from ornitail.calibration.hotwire_laws import (
     HotwireFitProvenance,
@@ -129,6 +128,9 @@ def fit_kings_law(
         def voltage_residual(parameters: np.ndarray) -> np.ndarray:
             a, b_, n = parameters
             return np.sqrt(np.maximum(a + b_ * velocity**n, 0.0)) - corrected
+
+        # Imported here: `ornitail calibration --help` needs no scipy.
+        from scipy.optimize import least_squares
 
         start = np.array([max(a_v2, 1e-6), b, exponent])
         solution = least_squares(

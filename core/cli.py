@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import importlib
 import sys
+from collections.abc import Iterator, Mapping, MutableMapping
+from dataclasses import dataclass
 from typing import Any, NoReturn
 
 import click
@@ -48,38 +51,153 @@ class _UserErrorsAsOneLine(click.Group):
             _exit_with_click_error(error)
 
 
-@click.group(cls=_UserErrorsAsOneLine)
+@dataclass(frozen=True)
+class LazyCommand:
+    """A command imported only when it is used (its module may import numpy, casadi, Qt ...).
+
+    ``target`` and each of ``extras`` are ``"module:attribute"``; the ``extras`` are added to the loaded group.
+    ``help`` is the command's first sentence, which its group's ``--help`` lists without importing the module
+    (``tests/test_cli_startup.py`` checks that the listing matches the loaded commands').
+    """
+
+    target: str
+    help: str
+    extras: tuple[str, ...] = ()
+
+    def load(self) -> click.Command:
+        """Import the command (and add the extras to it)."""
+        command = _attribute(self.target)
+        for extra in self.extras:
+            command.add_command(_attribute(extra))
+        return command
+
+
+def _attribute(target: str) -> Any:
+    module_name, _, attribute = target.partition(":")
+    return getattr(importlib.import_module(module_name), attribute)
+
+
+_AREA_COMMANDS = {
+    "calibration": LazyCommand(
+        "ornitail.calibration.cli:calibration_group", "Balance, hot-wire and tunnel calibrations."
+    ),
+    "demo": LazyCommand(
+        "ornitail.core.demo:demo_command",
+        "Run the study's tunnel protocol on the simulated rig and print cycle-averaged forces.",
+    ),
+    "design": LazyCommand(
+        "ornitail.design.cli:design_group", "Tail design: geometry, trend fits, proposals."
+    ),
+    "flight": LazyCommand(
+        "ornitail.flight.cli:flight_group",
+        "Free-flight system identification.",
+        extras=("ornitail.flight.campaign_cli:campaign_command",),
+    ),
+    "gap": LazyCommand(
+        "ornitail.gap.cli:gap_group", "Sim-to-real gap: where it lies, which effect, how far."
+    ),
+    "gui": LazyCommand(
+        "ornitail.gui.cli:gui_command",
+        "Open the desktop window: live view, cycle view, controls, sweeps, runs and design.",
+    ),
+    "process": LazyCommand(
+        "ornitail.balance.process_cli:process_command",
+        "Cycle-average recorded runs; write tail contribution, stability derivatives and figures.",
+    ),
+    "rig": LazyCommand(
+        "ornitail.acquisition.rig_check_cli:rig_group", "Rig files and the instruments they name."
+    ),
+    "runs": LazyCommand(
+        "ornitail.acquisition.runs_cli:runs_command",
+        "List recorded runs, oldest first; runs whose process died are shown as crashed.",
+    ),
+    "sim": LazyCommand(
+        "ornitail.sim.cli:sim_group", "Physics simulator of the DelFly II with its tail."
+    ),
+    "sweep": LazyCommand(
+        "ornitail.acquisition.sweep_cli:sweep_command",
+        "Run the sweep PLAN on the rig: check every set point against the rig's limits, then move, settle and "
+        "record each point.",
+    ),
+}
+"""The area commands of ``ornitail``, imported on first use so that ``ornitail --help`` starts fast."""
+
+
+class _LazyCommands(MutableMapping[str, click.Command]):
+    """A group's ``commands`` mapping whose :class:`LazyCommand` entries are imported when first looked up.
+
+    Listing names and ``in`` do not import anything; getting a command (click's ``get_command``, ``items()``,
+    ``values()``) imports it once and keeps it.
+    """
+
+    def __init__(self, lazy: Mapping[str, LazyCommand]) -> None:
+        self.lazy = dict(lazy)
+        self.loaded: dict[str, click.Command] = {}
+
+    def __getitem__(self, name: str) -> click.Command:
+        if name not in self.loaded:
+            self.loaded[name] = self.lazy.pop(name).load()
+        return self.loaded[name]
+
+    def __setitem__(self, name: str, command: click.Command) -> None:
+        self.lazy.pop(name, None)
+        self.loaded[name] = command
+
+    def __delitem__(self, name: str) -> None:
+        if name in self.lazy:
+            del self.lazy[name]
+        else:
+            del self.loaded[name]
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.lazy or name in self.loaded
+
+    def __iter__(self) -> Iterator[str]:
+        return iter([*self.loaded, *self.lazy])
+
+    def __len__(self) -> int:
+        return len(self.loaded) + len(self.lazy)
+
+
+class LazyGroup(click.Group):
+    """A click group whose ``lazy_commands`` are imported on first use; ``--help`` lists them without importing
+    them (click's "lazy loading of subcommands" pattern, with each command's first sentence stored)."""
+
+    def __init__(
+        self, *args: Any, lazy_commands: Mapping[str, LazyCommand] | None = None, **kwargs: Any
+    ) -> None:
+        super().__init__(*args, **kwargs)
+        self.lazy_commands = _LazyCommands(lazy_commands or {})
+        self.lazy_commands.update(self.commands)
+        self.commands = self.lazy_commands
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        """As click's, with the stored first sentence of each command not loaded yet."""
+        commands = self.lazy_commands
+        names = [
+            name
+            for name in self.list_commands(ctx)
+            if name in commands.lazy or not commands[name].hidden
+        ]
+        if not names:
+            return
+        limit = formatter.width - 6 - max(len(name) for name in names)
+        rows = []
+        for name in names:
+            if name in commands.lazy:  # a stand-in shortens the sentence as click does
+                stand_in = click.Command(name, help=commands.lazy[name].help)
+                rows.append((name, stand_in.get_short_help_str(limit)))
+            else:
+                rows.append((name, commands[name].get_short_help_str(limit)))
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
+
+
+class _MainGroup(_UserErrorsAsOneLine, LazyGroup):
+    """The ``ornitail`` group: user errors as one line; area commands imported on first use."""
+
+
+@click.group(cls=_MainGroup, lazy_commands=_AREA_COMMANDS)
 @click.version_option(package_name="ornitail")
 def main() -> None:
     """Wind-tunnel and free-flight tools for the tail of the DelFly II flapping-wing MAV."""
-
-
-def _register_area_commands() -> None:
-    from ornitail.acquisition.rig_check_cli import rig_group
-    from ornitail.acquisition.runs_cli import runs_command
-    from ornitail.acquisition.sweep_cli import sweep_command
-    from ornitail.balance.process_cli import process_command
-    from ornitail.calibration.cli import calibration_group
-    from ornitail.core.demo import demo_command
-    from ornitail.design.cli import design_group
-    from ornitail.flight.campaign_cli import campaign_command
-    from ornitail.flight.cli import flight_group
-    from ornitail.gap.cli import gap_group
-    from ornitail.gui.cli import gui_command
-    from ornitail.sim.cli import sim_group
-
-    main.add_command(calibration_group)
-    main.add_command(demo_command)
-    main.add_command(design_group)
-    flight_group.add_command(campaign_command)
-    main.add_command(flight_group)
-    main.add_command(gap_group)
-    main.add_command(gui_command)
-    main.add_command(process_command)
-    main.add_command(rig_group)
-    main.add_command(runs_command)
-    main.add_command(sim_group)
-    main.add_command(sweep_command)
-
-
-_register_area_commands()

@@ -14,27 +14,17 @@ import math
 import sys
 from importlib.resources import as_file, files
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
-import pandas as pd
 
-from ornitail.acquisition.catalog import default_data_root
-from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, read_rig_file
-from ornitail.acquisition.sweep_cli import (
-    check_time_scale_option,
-    exit_code_of,
-    guarded,
-    run_sweep_with_progress,
-    sweep_result_record,
-)
-from ornitail.balance.point_loads import BODY_LOAD_NAMES
-from ornitail.balance.process_runs import process_runs
-from ornitail.core.demo_design import design_from_simulated_campaign
 from ornitail.core.output import emit, json_option
-from ornitail.design.propose_cli import render_proposal
-from ornitail.sim.configuration import study_configuration
-from ornitail.sim.tunnel_truth import LOAD_KEYS, tunnel_truth
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+# The sweep, processing, simulator and design modules (numpy, pandas, scipy, casadi, matplotlib, h5py) are
+# imported inside the functions that use them: `ornitail --help` and `ornitail demo --help` stay fast.
 
 DEMO_TIME_SCALE = 4.0
 """The simulated rig runs this many times faster than real time in the demo (the DAQ then streams 40 k
@@ -84,6 +74,10 @@ def truth_comparison(
     and velocity read during their records, :mod:`ornitail.balance.condition_correction`: the fan settles within
     its tolerance, not on the set value); X0, Z0, M0 and the derivatives at the set steady state, which the fit's
     intercept refers to."""
+    from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, read_rig_file
+    from ornitail.sim.configuration import study_configuration
+    from ornitail.sim.tunnel_truth import LOAD_KEYS, tunnel_truth
+
     configuration = study_configuration(
         str(table["tail_id"].iloc[0]), float(table["x_h_mm"].iloc[0])
     )
@@ -148,6 +142,8 @@ def _truth_lines(comparison: dict[str, dict[str, Any]]) -> list[str]:
 
 
 def _steady_state_summary(table: pd.DataFrame) -> dict[str, Any]:
+    from ornitail.balance.point_loads import BODY_LOAD_NAMES
+
     steady = table[table["sweep"] == "steady_state"]
     summary = {}
     for tailed, group in steady.groupby("tailed"):
@@ -220,6 +216,8 @@ def _render(result: dict[str, Any]) -> str:
             f"{targets['theta_ss_deg']:g} +- {targets['theta_tolerance_deg']:g} deg, damping ratio >= "
             f"{targets['damping_ratio_min']:g}, smallest area):"
         )
+        from ornitail.design.propose_cli import render_proposal
+
         lines.append(render_proposal(design))
     return "\n".join(lines)
 
@@ -241,6 +239,20 @@ def _render(result: dict[str, Any]) -> str:
 @json_option
 def demo_command(data_root: Path | None, time_scale: float, as_json: bool) -> None:
     """Run the study's tunnel protocol on the simulated rig and print cycle-averaged forces."""
+    import pandas as pd
+
+    from ornitail.acquisition.catalog import default_data_root
+    from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE
+    from ornitail.acquisition.sweep_cli import (
+        check_time_scale_option,
+        exit_code_of,
+        guarded,
+        run_sweep_with_progress,
+        sweep_result_record,
+    )
+    from ornitail.balance.process_runs import process_runs
+    from ornitail.core.demo_design import design_from_simulated_campaign
+
     check_time_scale_option(time_scale)
     data_root = data_root or default_data_root()
     plan_resource = files("ornitail.acquisition") / "data" / "study_tunnel_plan.toml"

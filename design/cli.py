@@ -6,16 +6,37 @@ from typing import Any
 
 import click
 
+from ornitail.core.cli import LazyCommand, LazyGroup
 from ornitail.core.output import emit, json_option
-from ornitail.design.geometry import TailGeometry
 
-design_group = click.Group("design", help="Tail design: geometry, trend fits, proposals.")
+design_group = LazyGroup(
+    "design",
+    help="Tail design: geometry, trend fits, proposals.",
+    lazy_commands={
+        "trends": LazyCommand(
+            "ornitail.design.trends_cli:trends_command",
+            "Fit steady state and derivatives against tail geometry and x_h; print coefficients, LOO RMSE, "
+            "sources and, with --predict-*, a prediction with both intervals and its extrapolation measure.",
+        ),
+        "propose": LazyCommand(
+            "ornitail.design.propose_cli:propose_command",
+            "Propose a tail (b, b_LE, c_r, c_t, x_h) meeting steady-state and pitch-damping targets.",
+        ),
+        "pareto": LazyCommand(
+            "ornitail.design.pareto_cli:pareto_command",
+            "Trade-off front by epsilon-constraint re-solves of the proposal problem.",
+        ),
+    },
+)
+"""Geometry is defined here; trends, propose and pareto (casadi, scipy, matplotlib) are imported on first use."""
 
 
 def geometry_result(
     b_mm: float, b_le_mm: float | None, c_r_mm: float, c_t_mm: float
 ) -> dict[str, Any]:
     """S (cm^2), AR and the dimensions of a valid planform; an invalid one raises UserInputError."""
+    from ornitail.design.geometry import TailGeometry
+
     geometry = TailGeometry.from_mm(b_mm, b_le_mm, c_r_mm, c_t_mm)
     geometry.validate("--b/--b-le/--c-r/--c-t")
     return {
@@ -54,23 +75,3 @@ def geometry_command(
 ) -> None:
     """Planform area S and aspect ratio AR of a tail from its dimensions in mm (domain.md section 2)."""
     emit(geometry_result(b_mm, b_le_mm, c_r_mm, c_t_mm), as_json, _render_geometry)
-
-
-def _register_design_commands() -> None:
-    from ornitail.design.trends_cli import trends_command
-
-    design_group.add_command(trends_command)
-
-
-_register_design_commands()
-
-
-def _register_proposal_commands() -> None:
-    from ornitail.design.pareto_cli import pareto_command
-    from ornitail.design.propose_cli import propose_command
-
-    design_group.add_command(propose_command)
-    design_group.add_command(pareto_command)
-
-
-_register_proposal_commands()

@@ -11,10 +11,9 @@ import click
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import prepare_output_directory, prepare_output_file
 from ornitail.core.output import emit, json_option, to_jsonable
-from ornitail.gap.benchmark import run_benchmark
-from ornitail.gap.example_data import write_example
-from ornitail.gap.report_files import diagnose_files
-from ornitail.gap.report_text import render_report
+
+# The diagnosis, example data and benchmark (numpy, scipy, casadi, matplotlib) are imported inside the
+# commands: `ornitail gap --help` stays fast.
 
 MAX_SEED = 2**32 - 1
 """Largest seed accepted (seeds are 0..2**32 - 1)."""
@@ -67,6 +66,9 @@ def diagnose_command(
 ) -> None:
     """Diagnose measured data against a baseline model and write the report."""
     prepare_output_directory(out)
+    from ornitail.gap.report_files import diagnose_files
+    from ornitail.gap.report_text import render_report
+
     report = diagnose_files(model_path, list(data_paths), seed, out, pictures=not no_pictures)
     emit(report, as_json, render_report)
 
@@ -132,6 +134,8 @@ def example_command(
     as_json: bool,
 ) -> None:
     """Write example data with withheld effects and the baseline model file that lacks them."""
+    from ornitail.gap.example_data import write_example
+
     parsed = dict(_parse_effect(text) for text in effects)
     result = write_example(kind, parsed, tail, x_h_mm, manoeuvres, seed, out)
     emit(
@@ -173,6 +177,8 @@ def benchmark_command(
     cases: int, seed: int, manoeuvres: int, out: Path | None, as_json: bool
 ) -> None:
     """Diagnose simulated flights with known withheld effects, blind, and score the diagnosis."""
+    from ornitail.gap.benchmark import run_benchmark
+
     if out is not None:
         prepare_output_file(out)
     with click.progressbar(

@@ -9,7 +9,6 @@ from pathlib import Path
 
 import click
 
-from ornitail.acquisition.rig_file import read_rig_file
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import prepare_output_directory
 
@@ -18,6 +17,8 @@ def check_gui_options(
     data_root: Path | None, rig_file: Path | None, time_scale: float | None
 ) -> None:
     """Refuse bad options before any window opens: time scale, data root folder, rig file."""
+    from ornitail.acquisition.rig_file import read_rig_file  # numpy, pyserial: not for --help
+
     if time_scale is not None and not (math.isfinite(time_scale) and time_scale > 0):
         raise UserInputError("--time-scale", f"{time_scale!r} must be a finite number > 0")
     if data_root is not None:

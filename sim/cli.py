@@ -11,11 +11,8 @@ import click
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import prepare_output_file
 from ornitail.core.output import emit, json_option
-from ornitail.sim.configuration import study_configuration
-from ornitail.sim.dynamics import TrimNotFoundError, linearise
-from ornitail.sim.effects import EffectSet
-from ornitail.sim.free_flight import FlightPlan, simulate_flight, write_flight_log_csv
-from ornitail.sim.tunnel_truth import tunnel_truth
+
+# The simulator (numpy, scipy, pandas) is imported inside the commands: `ornitail sim --help` stays fast.
 
 MAX_SEED = 2**32 - 1
 """Largest random seed accepted (seeds are 0..2**32 - 1)."""
@@ -25,6 +22,10 @@ sim_group = click.Group("sim", help="Physics simulator of the DelFly II with its
 
 def trim_summary(tail: str, x_h_mm: float) -> dict[str, Any]:
     """Trim, eigenstructure and derivatives of a study tail at x_h (mm) as a JSON-ready dict."""
+    from ornitail.sim.configuration import study_configuration
+    from ornitail.sim.dynamics import TrimNotFoundError, linearise
+    from ornitail.sim.effects import EffectSet
+
     configuration = study_configuration(tail, x_h_mm)
     try:
         model = linearise(configuration, EffectSet())
@@ -101,6 +102,11 @@ def flight_command(
     tail: str, x_h_mm: float, duration_s: float, seed: int, out: Path, as_json: bool
 ) -> None:
     """Fly elevator doublets with a study tail and write the 512 Hz flight log as CSV."""
+    from ornitail.sim.configuration import study_configuration
+    from ornitail.sim.dynamics import TrimNotFoundError
+    from ornitail.sim.effects import EffectSet
+    from ornitail.sim.free_flight import FlightPlan, simulate_flight, write_flight_log_csv
+
     if not (math.isfinite(duration_s) and 1.0 <= duration_s <= 3600.0):
         raise UserInputError("--duration-s", f"value {duration_s!r} is outside 1..3600 s")
     configuration = study_configuration(tail, x_h_mm)
@@ -191,6 +197,9 @@ def tunnel_command(
     tunnel derivatives that `ornitail process` estimates (effects on the air and the vehicle, none of the
     sensor's). Compare them with a processed sweep of the simulated rig."""
     from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, read_rig_file
+    from ornitail.sim.configuration import study_configuration
+    from ornitail.sim.effects import EffectSet
+    from ornitail.sim.tunnel_truth import tunnel_truth
 
     _check_tunnel_point(
         **{"--theta-deg": theta_deg, "--v-m-s": v_m_s, "--f-hz": f_hz, "--day": day}

@@ -106,6 +106,8 @@ def test_process_writes_tables_figures_and_one_json_object(recorded_sweep, cli, 
     kept = [line for line in journal.read_text().splitlines() if '"kind": "tare"' not in line]
     journal.write_text("\n".join(kept) + "\n")
     missing_calibration = shutil.copytree(runs[0], tmp_path / "no-cal")
+    # Neither the run folder's copy of the calibration file nor the original is there.
+    shutil.rmtree(missing_calibration / "calibration")
     metadata = json.loads((missing_calibration / "run.json").read_text())
     metadata["calibration_files"]["balance"]["path"] = str(tmp_path / "gone.cal")
     (missing_calibration / "run.json").write_text(json.dumps(metadata))
