@@ -172,17 +172,23 @@ def _render(result: dict[str, Any]) -> str:
         )
         for state, values in steady.items():
             cells = "".join(
-                f"{values[name]:>+13.5f} +-{values[name + '_2sigma']:<8.5f}"
+                f"{values[name]:>+13.6f} +-{values[name + '_2sigma']:<8.2g}"
                 for name in _PRINTED_LOADS
             )
             lines.append(f"{state:10s}{cells}{values['f_hall_hz']:>14.2f}{values['cycles']:>8d}")
     contribution = result.get("tail_contribution")
     if contribution:
         cells = "".join(
-            f"{contribution[name]:>+13.5f} +-{2 * contribution[name + '_sigma']:<8.5f}"
+            f"{contribution[name]:>+13.6f} +-{2 * contribution[name + '_sigma']:<8.2g}"
             for name in _PRINTED_LOADS
         )
         lines.append(f"{'tail':10s}{cells}   (tailed - tailless, +- 2 sigma of the mean)")
+        if math.isfinite(contribution.get("v_reference_m_s", math.nan)):
+            lines.append(
+                f"  at theta {contribution['theta_reference_deg']:.2f} deg, V {contribution['v_reference_m_s']:.4f} "
+                f"m/s (read during the tailless repeats; set {contribution['v_m_s']:.3f} m/s): every repeat moved "
+                "there along the fitted derivatives"
+            )
         resolvable = [name for name in _PRINTED_LOADS if contribution[f"{name}_resolvable"]]
         lines.append(
             "resolvable above the balance resolution and scatter: "

@@ -1,0 +1,129 @@
+"""Benchmark: coverage of the tunnel results on the simulated *rig*, against the simulator's truth, over seeds.
+
+``benchmarks/tunnel_coverage.py`` feeds processing with the simulator's own sweeps, which hold every set value
+exactly. This one runs what a user runs: the shipped study plan through the real drivers on the simulated rig
+(ptys, the board's protocol, the fan's lag and settle tolerance, the motor's spin-down, the balance's thermal
+drift and every other effect on; ``acquisition/data/simulated_rig.toml`` with ``[rig].seed`` set per run), then
+``ornitail process``'s library call, then the demo's truth comparison (:func:`ornitail.core.demo.truth_comparison`:
+the tail's contribution at the condition its repeats were moved to, X0, Z0, M0 and the nine derivatives at the set
+steady state, each against ``ornitail sim tunnel``).
+
+Printed (one JSON object): per quantity the coverage of the 2-sigma interval, the RMS and mean of the
+sigma-normalised error z = (estimate - truth) / sigma, and the same pooled over the 15 quantities. Targets
+(issue 14): coverage 0.90-0.98 and RMS z 0.7-1.3 per quantity. With N seeds a coverage's standard deviation is
+about sqrt(0.95 x 0.05 / N) (0.049 at 20 seeds). Exit code 0 when the pooled figures are inside the targets.
+
+Run: ``.venv/bin/python benchmarks/rig_coverage.py --seeds 20 --time-scale 6`` (each sweep ~400 s of rig time:
+about 70 s at time scale 6 on an idle 2-core machine; the rig waits, the CPU is mostly idle).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import sys
+import tempfile
+from importlib.resources import files
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ornitail.acquisition.rig import Rig
+from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, read_rig_file
+from ornitail.acquisition.sweep import run_sweep
+from ornitail.acquisition.sweep_plan import load_plan
+from ornitail.balance.process_runs import process_runs
+from ornitail.core.demo import truth_comparison
+
+COVERAGE_TARGET = (0.90, 0.98)
+RMS_Z_TARGET = (0.7, 1.3)
+
+
+def one_sweep(seed: int, time_scale: float, root: Path) -> dict[str, dict]:
+    """Record the study plan on the simulated rig with ``seed``, process it, compare with the truth."""
+    description = dataclasses.replace(
+        read_rig_file(DEFAULT_RIG_FILE), seed=seed, time_scale=time_scale
+    )
+    plan = load_plan(Path(str(files("ornitail.acquisition") / "data" / "study_tunnel_plan.toml")))
+    rig = Rig(description).connect()
+    try:
+        result = run_sweep(plan, rig, root)
+    finally:
+        rig.close(raise_errors=False)
+    if result.status != "completed":
+        raise RuntimeError(f"seed {seed}: sweep ended {result.status}: {result.message}")
+    processed = process_runs(result.run_directories, root / "processed")
+    table = pd.read_csv(processed["table_csv"])
+    configuration = processed["configurations"][0]
+    contribution = configuration["tail_contribution"][0]
+    derivatives = configuration["derivatives"]
+    return truth_comparison(
+        table, contribution, derivatives["derivatives"], derivatives["steady_state"]
+    )
+
+
+def summary(z_by_quantity: dict[str, list[float]]) -> dict[str, dict[str, float]]:
+    """Coverage of |z| <= 2, RMS z and mean z per quantity and pooled."""
+    rows = {}
+    pooled: list[float] = []
+    for name, values in z_by_quantity.items():
+        z = np.asarray(values, dtype=float)
+        pooled += values
+        rows[name] = {
+            "coverage": float(np.mean(np.abs(z) <= 2.0)),
+            "rms_z": float(np.sqrt(np.mean(z**2))),
+            "mean_z": float(np.mean(z)),
+            "n": int(len(z)),
+        }
+    z = np.asarray(pooled, dtype=float)
+    rows["pooled"] = {
+        "coverage": float(np.mean(np.abs(z) <= 2.0)),
+        "rms_z": float(np.sqrt(np.mean(z**2))),
+        "mean_z": float(np.mean(z)),
+        "n": int(len(z)),
+    }
+    return rows
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=20)
+    parser.add_argument("--first-seed", type=int, default=1)
+    parser.add_argument("--time-scale", type=float, default=6.0)
+    arguments = parser.parse_args(argv)
+    if arguments.seeds < 1 or not (
+        math.isfinite(arguments.time_scale) and arguments.time_scale > 0
+    ):
+        print("rig_coverage: --seeds must be >= 1 and --time-scale > 0", file=sys.stderr)
+        return 2
+    z_by_quantity: dict[str, list[float]] = {}
+    for seed in range(arguments.first_seed, arguments.first_seed + arguments.seeds):
+        with tempfile.TemporaryDirectory(prefix="rig-coverage-") as folder:
+            compared = one_sweep(seed, arguments.time_scale, Path(folder))
+        for name, entry in compared.items():
+            z_by_quantity.setdefault(name, []).append(float(entry["error_in_sigmas"]))
+        print(
+            f"seed {seed}: "
+            + " ".join(f"{n} {e['error_in_sigmas']:+.1f}" for n, e in compared.items()),
+            file=sys.stderr,
+            flush=True,
+        )
+    result = summary(z_by_quantity)
+    print(
+        json.dumps(
+            {"seeds": arguments.seeds, "time_scale": arguments.time_scale, **result}, indent=1
+        )
+    )
+    pooled = result["pooled"]
+    met = (
+        COVERAGE_TARGET[0] <= pooled["coverage"] <= COVERAGE_TARGET[1]
+        and RMS_Z_TARGET[0] <= pooled["rms_z"] <= RMS_Z_TARGET[1]
+    )
+    return 0 if met else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
