@@ -343,7 +343,8 @@ class Rig:
 
     def recording_description(self) -> dict[str, Any]:
         """What a recording stores about this rig (JSON-serialisable): name, file, simulated, time scale,
-        balance route and tool transform (mm, deg)."""
+        balance route, tool transform (mm, deg) and the motor's gear ratio (motor turns per flap, for the
+        frequency cross-check in processing)."""
         description = self.description
         return {
             "name": description.name,
@@ -352,6 +353,7 @@ class Rig:
             "time_scale": self._time_scale,
             "balance_route": description.balance_route,
             "tool_transform_mm_deg": list(description.tool_transform.as_mm_deg()),
+            "gear_ratio": description.gear_ratio,
         }
 
     def calibration_files(self) -> dict[str, Path]:

@@ -438,20 +438,30 @@ def measured_set_points(
     return measured
 
 
+def recorded_gear_ratio(recording: Recording) -> float:
+    """The motor's gear ratio the run was recorded with (``run.json`` ``rig.gear_ratio``; runs recorded before it
+    was stored: the DelFly II's 21.33)."""
+    value = recording.metadata.get("rig", {}).get("gear_ratio")
+    return FLAPPING_GEAR_RATIO if value is None else float(value)
+
+
 def frequency_cross_check_record(
-    hall_frequency_hz: float, motor_rpm: float | None
+    hall_frequency_hz: float, motor_rpm: float | None, gear_ratio: float = FLAPPING_GEAR_RATIO
 ) -> dict[str, float | bool]:
-    """Hall against motor flapping frequency for one point: ``motor_rpm``, ``f_motor_hz``, ``f_disagreement``
-    ((Hall - motor) / motor) and ``f_disagrees`` (beyond 2 %); no rpm reading gives NaN and no flag."""
+    """Hall against motor flapping frequency for one point: ``motor_rpm``, ``f_motor_hz`` (rpm / 60 /
+    ``gear_ratio``), ``f_disagreement`` ((Hall - motor) / motor) and ``f_disagrees`` (beyond 2 %); no rpm reading
+    gives NaN and no flag."""
     if motor_rpm is None or not math.isfinite(float(motor_rpm)):
         return {
             "motor_rpm": math.nan,
             "f_motor_hz": math.nan,
             "f_disagreement": math.nan,
             "f_disagrees": False,
+            "gear_ratio": gear_ratio,
         }
-    check = check_flapping_frequency(hall_frequency_hz, float(motor_rpm))
+    check = check_flapping_frequency(hall_frequency_hz, float(motor_rpm), gear_ratio=gear_ratio)
     return {
+        "gear_ratio": gear_ratio,
         "motor_rpm": float(motor_rpm),
         "f_motor_hz": float(check.motor_frequency_hz),
         "f_disagreement": float(check.relative_disagreement),
@@ -516,7 +526,9 @@ def table_of_points(
                 **{name: point.flags.get(name, -1) for name in SATURATION_COLUMNS},
                 **loads.as_record(),
                 **frequency_cross_check_record(
-                    loads.flapping_frequency_hz, row.get("motor_rpm_mean")
+                    loads.flapping_frequency_hz,
+                    row.get("motor_rpm_mean"),
+                    recorded_gear_ratio(point.recording),
                 ),
             }
         )
@@ -559,7 +571,8 @@ def frequency_check_warnings(table: pd.DataFrame) -> list[str]:
         lines.append(
             f"warning: {row['run_id']} set point {int(row['plan_point_index'])} ({row['sweep']}): Hall "
             f"{row['f_hall_hz']:.3f} Hz vs motor {row['f_motor_hz']:.3f} Hz (rpm / 60 / "
-            f"{FLAPPING_GEAR_RATIO}), {100 * row['f_disagreement']:+.1f} %: slipping gear, missed Hall "
+            f"{row.get('gear_ratio', FLAPPING_GEAR_RATIO):g}), {100 * row['f_disagreement']:+.1f} %: slipping "
+            "gear, missed Hall "
             "edges or a wrong rpm channel"
         )
     return lines

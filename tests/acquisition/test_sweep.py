@@ -69,6 +69,8 @@ def test_sweep_records_every_point_in_two_runs_with_tares(simulated_rig, tmp_pat
     frame = tailed.set_points_frame()
     rows = frame["last_sample_index"] - frame["first_sample_index"] + 1
     assert (rows == 6000).all()  # 0.6 s at 10 kHz
+    # What processing needs from the rig travels with the run.
+    assert tailed.metadata["rig"]["gear_ratio"] == 21.33
     # The stream never pauses: no counter gaps, nothing lost, on the simulated link.
     assert tailed.counter_gaps() == []
     # The rig reached each set point: pitch and velocity read during the record (their means over ~6 readings,

@@ -169,3 +169,20 @@ def test_missing_rpm_is_not_flagged_and_disagreements_give_one_warning_line_each
     assert len(warnings) == 2
     assert "r1 set point 1" in warnings[0] and "+11.1 %" in warnings[0]
     assert all(line.startswith("warning:") and "\n" not in line for line in warnings)
+
+
+def test_the_cross_check_uses_the_gear_ratio_the_run_was_recorded_with():
+    """A rig whose motor turns 10 times per flap: 8100 rpm is 13.5 Hz, not 6.33 Hz as 21.33 would make it."""
+    record = frequency_cross_check_record(13.5, 8100.0, gear_ratio=10.0)
+    assert record["gear_ratio"] == 10.0
+    assert record["f_motor_hz"] == pytest.approx(13.5)
+    assert record["f_disagrees"] is False
+    import pandas as pd
+
+    warning = frequency_check_warnings(
+        pd.DataFrame(
+            [{"run_id": "r", "plan_point_index": 0, "sweep": "frequency", "f_hall_hz": 12.0,
+              **frequency_cross_check_record(12.0, 8100.0, gear_ratio=10.0)}]
+        )
+    )  # fmt: skip
+    assert "rpm / 60 / 10)" in warning[0]
