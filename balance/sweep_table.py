@@ -68,7 +68,7 @@ SATURATION_COLUMNS = (
     "tare_over_range_samples",
 )
 BALANCE_RESOLUTION_N = 0.149e-3 * 9.80665
-"""Nano-17 force resolution, 0.149 gram-force (domain.md section 3), N."""
+"""Nano-17 force resolution, 0.149 gram-force (docs/background.md section 3), N."""
 REPEATABILITY_SIGNIFICANCE = 0.01
 """Chance of a false alarm of the repeatability check: repeats scatter beyond their errors below this p-value."""
 MEASURED_CONDITION_COLUMNS = ("v_measured_m_s", "theta_measured_deg")

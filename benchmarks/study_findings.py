@@ -2,7 +2,7 @@
 
 Run: ``python benchmarks/study_findings.py``. Trims and linearises every study tail at the study's four
 tail positions (x_h = 57, 98, 114, 126 mm, reference/fuselages.csv) with all effects on, then checks
-each finding of Rijks et al. (AIAA 2018-0524, Section IV.B; domain.md section 6) and prints the finding,
+each finding of Rijks et al. (AIAA 2018-0524, Section IV.B; docs/background.md section 6) and prints the finding,
 the measured (study) value, the simulator's value and whether the simulator reproduces it.
 """
 

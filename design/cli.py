@@ -73,5 +73,5 @@ def _render_geometry(result: dict[str, Any]) -> str:
 def geometry_command(
     b_mm: float, b_le_mm: float | None, c_r_mm: float, c_t_mm: float, as_json: bool
 ) -> None:
-    """Planform area S and aspect ratio AR of a tail from its dimensions in mm (domain.md section 2)."""
+    """Planform area S and aspect ratio AR of a tail from its dimensions in mm (docs/background.md section 2)."""
     emit(geometry_result(b_mm, b_le_mm, c_r_mm, c_t_mm), as_json, _render_geometry)

@@ -1,6 +1,6 @@
 """Horizontal-tail planform of the DelFly II: dimensions, area, aspect ratio, local chord, validity.
 
-The outline (domain.md section 2) is a symmetric hexagon: a straight leading edge of width b_LE;
+The outline (docs/background.md section 2) is a symmetric hexagon: a straight leading edge of width b_LE;
 side edges that widen linearly to the full span b at a distance c_r - c_t behind the leading edge;
 straight tips of length c_t; a straight trailing edge of width b. The standard tail T2 has an
 elliptical leading edge instead (``leading_edge_span_m = None``): its local chord is c_t + (c_r -

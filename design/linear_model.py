@@ -1,4 +1,4 @@
-"""The decoupled longitudinal LTI model of domain.md section 5, for floats and for casadi symbols.
+"""The decoupled longitudinal LTI model of docs/background.md section 5, for floats and for casadi symbols.
 
 States are [q, u, w, theta] in the body frame of docs/frames.md (z_b along the fuselage towards the
 tail, positive M nose-down). About a steady state at pitch attitude theta0 (rad) and airspeed V0
@@ -36,7 +36,7 @@ def a_matrix_entries(
     cos: Callable[[Any], Any] = math.cos,
     sin: Callable[[Any], Any] = math.sin,
 ) -> Matrix:
-    """Rows of the 4x4 A matrix (domain.md section 5) as nested lists.
+    """Rows of the 4x4 A matrix (docs/background.md section 5) as nested lists.
 
     Parameters
     ----------

@@ -1,6 +1,6 @@
 """Vehicle mass and pitch inertia as functions of tail geometry and position (floats or CasADi symbols).
 
-Without campaign data these are documented *estimates* anchored to the study's figures (domain.md section 1):
+Without campaign data these are documented *estimates* anchored to the study's figures (docs/background.md section 1):
 
 - mass ``m = m_0 + rho_tail S + lambda_fuselage (x_h - 57 mm)``: tail foil and stiffeners at
   ``rho_tail = 0.03 kg/m^2`` (*estimate*: 10 um Mylar is 0.014 kg/m^2, plus carbon strips), the fuselage

@@ -6,7 +6,7 @@ Two fronts (SI units inside):
   largest damping reachable, the minimum-area tail with zeta >= eps.
 - ``damping-speed``: for airspeed ceilings eps between the V_ss of the smallest admissible tail and
   the V_ss of the best-damped one, the best-damped tail with V_ss <= eps (larger tails damp more but
-  fly faster, domain.md section 6).
+  fly faster, docs/background.md section 6).
 
 Every point is re-solved from the previous point's optimum and from Sobol starts; the best verified
 solution is kept. The user's other targets (e.g. theta_ss) stay constraints at every point.

@@ -1,12 +1,13 @@
 """Feature bases of the trend fits: which functions of tail geometry and position a quantity is linear in.
 
 A trend is ``quantity = coefficients . features(b, b_LE, c_r, c_t, x_h)``. The default basis ``"linear"`` is
-``[1, S, AR, x_h]`` (the study found steady states and derivatives roughly linear in S and AR, domain.md section
-6); the others add the span ``b`` (the flapping wake's high-velocity region, domain.md section 6), a curvature in
-``x_h`` (X_q peaks near 98 mm), or drop AR for tables where AR hardly varies.
+``[1, S, AR, x_h]`` (the study found steady states and derivatives roughly linear in S and AR,
+docs/background.md section 6); the others add the span ``b`` (the flapping wake's high-velocity region,
+docs/background.md section 6), a curvature in ``x_h`` (X_q peaks near 98 mm), or drop AR for tables where AR
+hardly varies.
 
 Features are written with + - * / only, so :meth:`TrendBasis.features` works on floats and on CasADi SX/MX
-symbols alike. The planform behind a geometry vector is the hexagon of domain.md section 2:
+symbols alike. The planform behind a geometry vector is the hexagon of docs/background.md section 2:
 ``S = (b_LE + b) / 2 (c_r - c_t) + b c_t`` and ``AR = b^2 / S``. All lengths in metres, S in m^2.
 """
 

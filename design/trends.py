@@ -7,7 +7,7 @@ For one quantity with observations ``y_i`` at feature rows ``f_i`` (design/trend
 weighted least squares with weights ``1 / sigma_i^2`` when every observation has a sigma, ordinary least squares
 (``sigma_i = 1``) otherwise. The scale ``kappa`` is estimated from the residuals, ``kappa = chi^2 / (n - p)``:
 the sigmas are treated as *relative* weights, because published and per-model sigmas (e.g. Table 4's 0.5 %) are
-estimation errors of single models, far below the flight-to-flight scatter about a trend (domain.md section 6).
+estimation errors of single models, far below the flight-to-flight scatter about a trend (docs/background.md section 6).
 
 - Parameter covariance ``C = kappa (F^T W F)^-1``.
 - ``sigma_mean`` at a new point f: ``sqrt(f^T C f)``, the uncertainty of the *mean trend* there.

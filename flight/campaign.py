@@ -1,6 +1,6 @@
 """The study's free-flight campaign for one configuration: from logs to a representative model.
 
-Steps (domain.md section 5): cut and pre-process the manoeuvres (:mod:`manoeuvres`); identify a
+Steps (docs/background.md section 5): cut and pre-process the manoeuvres (:mod:`manoeuvres`); identify a
 model per manoeuvre (:mod:`manoeuvre_models`); drop diverged fits; simulate each model on its
 measured input and flag it (:mod:`validation`); split the accepted manoeuvres 70/30 with the seed;
 build the mean, covariance-weighted and time-averaged-response models on the 70 %

@@ -1,6 +1,6 @@
 """A model per manoeuvre, and simulating any parameter vector on a manoeuvre.
 
-Each manoeuvre is identified on its own (domain.md section 5): equation error (least squares on
+Each manoeuvre is identified on its own (docs/background.md section 5): equation error (least squares on
 smoothed derivatives) first, then output-error maximum likelihood started from it. The model's
 trim constants (``theta0``, ``u0``, ``w0``) are set to the manoeuvre's steady state, ``m`` and
 ``Iyy`` to the configuration's mass properties, for every such constant the model file declares.

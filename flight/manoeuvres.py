@@ -1,6 +1,6 @@
 """Cutting free-flight manoeuvres out of a flight log, with the study's pre-processing.
 
-Pipeline (domain.md section 4), applied to a whole log before cutting so that the filter has no
+Pipeline (docs/background.md section 4), applied to a whole log before cutting so that the filter has no
 edge transients inside a manoeuvre:
 
 1. elevator glitch removal: samples of ``elevator_rad`` that differ by 25 deg or more from the

@@ -1,7 +1,7 @@
 """Validation of per-manoeuvre models: errors, rejection flags, the 70/30 split, and the choice
 of the representative among the averaged models.
 
-The study's rules (domain.md section 5): every individual model is simulated on its own measured
+The study's rules (docs/background.md section 5): every individual model is simulated on its own measured
 input and compared with its measured states. Per model three flags are summed:
 
 - RMS flag: for each of the four states, 1/4 if the model's RMS error is in the top 20 % of all

@@ -29,7 +29,7 @@ from ornitail.gap.table_checks import csv_header, finite_column
 CHANNELS = ("theta_ss", "v_ss", "f_ss")
 CHANNEL_UNITS = ("rad", "m/s", "Hz")
 # Standard error of a steady state averaged over a flight's run-ins (SI: rad, m/s, Hz), the
-# scatter of ``ornitail gap example --kind steady``. domain.md section 6: steady states drift
+# scatter of ``ornitail gap example --kind steady``. docs/background.md section 6: steady states drift
 # between days; the study's single-flight scatter (reference/steady_state_validation.csv) is
 # about 2 deg, 0.1 m/s, 0.5 Hz, so give *_sigma columns when the table is not averaged.
 DEFAULT_SIGMA = np.array([math.radians(0.5), 0.02, 0.05])

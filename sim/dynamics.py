@@ -168,7 +168,7 @@ class LinearisedModel:
 def a_matrix_from_derivatives(
     derivatives: dict[str, float], mass_kg: float, iyy_kg_m2: float, trim: TrimState
 ) -> np.ndarray:
-    """The A matrix of domain.md section 5 built from dimensional derivatives and trim."""
+    """The A matrix of docs/background.md section 5 built from dimensional derivatives and trim."""
     d, m, i = derivatives, mass_kg, iyy_kg_m2
     g, theta = GRAVITY_M_S2, trim.theta_rad
     return np.array(

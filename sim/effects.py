@@ -1,4 +1,4 @@
-"""Switchable physical effects of the simulator (domain.md section 7), each with its own parameters.
+"""Switchable physical effects of the simulator (docs/background.md section 7), each with its own parameters.
 
 Every effect is a small frozen dataclass with ``enabled`` and its parameters; :class:`EffectSet`
 holds one of each. Later work switches effects by name::

@@ -1,7 +1,7 @@
 """Physical parameters of the simulated DelFly II, in SI units, with where each value comes from.
 
 Stations ``s`` are distances in metres along the fuselage, measured aft (along +z_b) from the
-flapping wings' root leading edge. Marks in the comments: *study* = domain.md / the study's tables;
+flapping wings' root leading edge. Marks in the comments: *study* = docs/background.md / the study's tables;
 *estimate* = chosen from general DelFly knowledge; *calibrated* = tuned so that the simulator
 reproduces the study's steady states, eigenstructure and derivative orders (see docs/simulator.md).
 """

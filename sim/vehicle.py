@@ -4,7 +4,7 @@ Point-mass model along the fuselage (stations s aft of the wing leading edge): f
 (motor, gears, wings), battery and electronics at x_e, a uniform fuselage rod reaching the tail's
 trailing edge, the fixed tail assembly (vertical tail, actuators), the horizontal base tail and the
 planform (areal density times S, at its centroid). Moving the tail 57 -> 126 mm moves the CG ~15 mm
-aft and raises I_yy ~150 % (domain.md 1).
+aft and raises I_yy ~150 % (docs/background.md section 1).
 """
 
 from __future__ import annotations

@@ -46,7 +46,7 @@ def test_tail_contribution_covers_the_simulator_truth(make_simulated_sweep):
     scores = np.array(scores)
     # 30 intervals at nominal 95 %: at least 25 covered (binomial probability of fewer is below 1 %).
     assert (np.abs(scores) <= 2).sum() >= 25
-    # The simulated S3 tail adds of order 0.01 N along x_b (domain.md: 0.01-0.03 N): resolvable on the balance.
+    # The simulated S3 tail adds of order 0.01 N along x_b (docs/background.md: 0.01-0.03 N): resolvable on the balance.
     assert truth[0] > 3 * BALANCE_RESOLUTION_N
 
 

@@ -82,7 +82,7 @@ def test_the_tail_trend_of_the_simulator_is_reproduced(campaign_results):
     assert _oscillatory(large).natural_frequency_rad_s < _oscillatory(small).natural_frequency_rad_s
     mq_small = small.representative.parameter_values()["Mq"]
     mq_large = large.representative.parameter_values()["Mq"]
-    assert mq_large < mq_small < 0  # |Mq| grows with tail area (domain.md section 6)
+    assert mq_large < mq_small < 0  # |Mq| grows with tail area (docs/background.md section 6)
     # steady state: a bigger tail flies faster and more nose-down
     assert large.steady_state.theta_rad > small.steady_state.theta_rad
     assert large.steady_state.airspeed_m_s > small.steady_state.airspeed_m_s

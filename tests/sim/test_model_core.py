@@ -119,7 +119,7 @@ def _flipped_table() -> pd.DataFrame:
 
 
 # Left out: S1's Mw (-3.8e-5, 23 % sigma, two orders below the other tails), S3's Zw (positive,
-# 24 % sigma) and S3's Zu (123 % sigma): domain.md calls Z derivatives and Mw poorly determined.
+# 24 % sigma) and S3's Zu (123 % sigma): docs/background.md calls Z derivatives and Mw poorly determined.
 # Zu > 0 comes from the wings' translational lift (thrust grows with cross-flow). Xq, Zq: see the
 # Xq test below.
 DERIVATIVE_CASES = [
@@ -138,7 +138,7 @@ def test_derivative_orders_match_the_sign_flipped_study_table(tail: str, paramet
     )
     simulated = linearise(study_configuration(tail, 98), EffectSet()).derivatives[parameter]
     assert np.sign(simulated) == np.sign(published)
-    # "orders": within a factor of three. With the study's wing arm (38 mm at 57 mm, domain.md 1)
+    # "orders": within a factor of three. With the study's wing arm (38 mm at 57 mm, docs/background.md section 1)
     # the model's Mu is 1.5-1.8x and Mq 1.9-2.3x the published values (docs/simulator.md).
     factor = 3.0
     assert 1 / factor <= simulated / published <= factor

@@ -154,7 +154,7 @@ def test_an_oscillatory_pair_and_real_poles_near_minus_1_and_minus_10(tail, x_h_
     linear = model(tail, x_h_mm)
     assert linear.oscillatory_eigenvalue() is not None
     slow, fast = linear.real_poles()[::-1]
-    # "near -1 and -10": within a factor ~2.5 of each (the study's real poles scatter, domain.md 5)
+    # "near -1 and -10": within a factor ~2.5 of each (the study's real poles scatter, docs/background.md section 5)
     assert -2.5 < slow < -0.4
     assert -15.0 < fast < -5.0
 

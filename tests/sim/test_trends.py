@@ -1,4 +1,4 @@
-"""The simulator reproduces the study's trends (domain.md section 6) from physics."""
+"""The simulator reproduces the study's trends (docs/background.md section 6) from physics."""
 
 from __future__ import annotations
 
@@ -147,7 +147,7 @@ def test_steady_states_are_of_the_study_order(tail, x_h_mm) -> None:
     trim = model(tail, x_h_mm).trim
     # study: theta 20-29 deg, V 0.7-0.9 m/s, f 13-14 Hz at 57 mm; the bounds widen these by its
     # 2-sigma day-to-day scatter (~2 deg, 0.1 m/s, 0.2 Hz). 98 mm flies slower and flatter: the
-    # CG moves ~10 mm aft and the wings' moment arm (38 mm at 57 mm, +40 % at 126 mm, domain.md 1)
+    # CG moves ~10 mm aft and the wings' moment arm (38 mm at 57 mm, +40 % at 126 mm, docs/background.md section 1)
     # grows ~25 %, so tan(theta) falls ~20 % and the slower flight needs up to 0.5 Hz more.
     lowest_theta_deg, lowest_speed, highest_frequency = (
         (18.0, 0.6, 14.2) if x_h_mm == 57.0 else (14.0, 0.45, 14.4)

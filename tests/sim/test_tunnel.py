@@ -86,7 +86,7 @@ def test_tail_removal_lowers_mass_and_removes_tail_force() -> None:
     without = true_cycle_average(CONFIGURATION, None, 0.4, 0.8, 13.5, False)
     assert without.mass_kg < with_tail.mass_kg - 0.001
     assert without.tail_x_n == 0.0 and with_tail.tail_x_n > 0.003
-    # domain.md 3: the tail force is of order 0.01-0.03 N, mostly along x_b
+    # docs/background.md section 3: the tail force is of order 0.01-0.03 N, mostly along x_b
     assert 0.003 < with_tail.tail_x_n < 0.04 and abs(with_tail.tail_z_n) < with_tail.tail_x_n
 
 
