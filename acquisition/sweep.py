@@ -571,6 +571,9 @@ def _run_tail_state(
                 started_s = rig.now_s()
                 context.emit("moving", point)
                 _move(rig, point)
+                context.motor_log.commanded(
+                    point.flapping_frequency_hz, rig.balance_samples_since_start(), context.stream
+                )
                 settle_s = _settle(context, point)
                 context.emit("settled", point)
                 record = _record_point(context, recorder, point, settle_s)
