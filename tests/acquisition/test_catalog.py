@@ -27,7 +27,6 @@ from ornitail.acquisition.recording_layout import (
     SetPointRecord,
     StreamLayout,
 )
-from ornitail.acquisition.runs_cli import runs_command
 from ornitail.core.cli import main
 from ornitail.core.errors import UserInputError
 
@@ -74,9 +73,7 @@ def populated_data_root(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="module")
 def cli_main():
-    """The ornitail root command with `runs` registered, as the lead registers it."""
-    if "runs" not in main.commands:
-        main.add_command(runs_command)
+    """The ornitail root command (it registers `runs`)."""
     return main
 
 
@@ -240,17 +237,8 @@ def test_runs_command_bad_input_is_one_line_and_exit_2(
 
 
 def _ornitail_subprocess_command() -> list[str]:
-    """The console script if `runs` is registered there, else the same root command via -c."""
-    console_script = shutil.which("ornitail") or str(Path(sys.executable).parent / "ornitail")
-    help_text = subprocess.run([console_script, "--help"], capture_output=True, text=True).stdout
-    if " runs " in help_text:
-        return [console_script]
-    registering = (
-        "from ornitail.core.cli import main; "
-        "from ornitail.acquisition.runs_cli import runs_command; "
-        "main.add_command(runs_command); main()"
-    )
-    return [sys.executable, "-c", registering]
+    """The console script."""
+    return [shutil.which("ornitail") or str(Path(sys.executable).parent / "ornitail")]
 
 
 def test_runs_command_through_a_real_process(populated_data_root):

@@ -32,7 +32,6 @@ from ornitail.acquisition.recording_layout import (
 )
 from ornitail.acquisition.recording_reader import load_recording
 from ornitail.acquisition.run_files import read_journal
-from ornitail.acquisition.runs_cli import runs_command
 from ornitail.core.cli import main
 
 LAYOUT = StreamLayout([ChannelSpec(f"gauge_{index}", "V") for index in range(6)], 10_000.0)
@@ -202,8 +201,6 @@ def test_a_locked_catalog_never_reaches_the_writer_and_is_reconciled_after_relea
     assert recorder.catalog_synced is False  # the row waits for the next reconcile
 
     # Still locked: `ornitail runs` lists the run as its directory says, with a note; exit code 0.
-    if "runs" not in main.commands:
-        main.add_command(runs_command)
     listed = CliRunner().invoke(main, ["runs", "--data-root", str(tmp_path), "--json"])
     assert listed.exit_code == 0, listed.output
     (run,) = json.loads(listed.stdout)["runs"]

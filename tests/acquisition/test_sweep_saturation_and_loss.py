@@ -18,11 +18,9 @@ from ornitail.acquisition import catalog_sync
 from ornitail.acquisition.catalog import CATALOG_FILE_NAME, RunCatalog
 from ornitail.acquisition.live_balance import LiveBalance
 from ornitail.acquisition.recording_reader import load_recording
-from ornitail.acquisition.runs_cli import runs_command
 from ornitail.acquisition.sweep import MAX_RETAKES, run_sweep
 from ornitail.acquisition.sweep_cli import EXIT_INCOMPLETE, exit_code_of, sweep_result_record
 from ornitail.acquisition.sweep_plan import plan_from_document
-from ornitail.balance.process_cli import process_command
 from ornitail.balance.sweep_table import cycle_averaged_table
 from ornitail.core.cli import main
 
@@ -51,15 +49,8 @@ def plan():
 
 @pytest.fixture
 def cli():
-    """The `ornitail` group with `runs` and `process` on it, run in-process."""
-    added = [
-        command for command in (runs_command, process_command) if command.name not in main.commands
-    ]
-    for command in added:
-        main.add_command(command)
-    yield lambda *arguments: CliRunner().invoke(main, [str(argument) for argument in arguments])
-    for command in added:
-        main.commands.pop(command.name)
+    """The `ornitail` group, run in-process."""
+    return lambda *arguments: CliRunner().invoke(main, [str(argument) for argument in arguments])
 
 
 def listed_runs(cli, data_root) -> dict[str, dict]:
@@ -236,7 +227,8 @@ def test_a_catalog_locked_through_the_whole_sweep_costs_no_sample_and_catches_up
 def test_lost_samples_are_counted_once_alike_by_runs_the_sweep_report_and_the_gui(
     simulated_rig, plan, tmp_path, cli
 ):
-    status_panel = pytest.importorskip("ornitail.gui.status_panel")
+    from ornitail.gui import status_panel
+
     board = simulated_rig.simulators.daq_board
     first_tailless = next(p for p in plan.set_points if not p.tail_attached)
     garbage = np.random.default_rng(11).integers(0, 256, 1000, dtype=np.uint8).tobytes()

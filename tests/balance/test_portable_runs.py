@@ -17,7 +17,6 @@ from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE
 from ornitail.acquisition.sweep import run_sweep
 from ornitail.acquisition.sweep_plan import plan_from_document
-from ornitail.balance.process_cli import process_command
 from ornitail.core.cli import main
 
 PLAN = {
@@ -33,15 +32,8 @@ TIME_SCALE = 5.0
 
 
 def process(*arguments):
-    """``ornitail process ... --json`` in-process (``process`` added to the group if core/cli.py lacks it)."""
-    registered = "process" in main.commands
-    if not registered:
-        main.add_command(process_command)
-    try:
-        return CliRunner().invoke(main, ["process", *map(str, arguments), "--json"])
-    finally:
-        if not registered:
-            main.commands.pop("process")
+    """``ornitail process ... --json`` in-process."""
+    return CliRunner().invoke(main, ["process", *map(str, arguments), "--json"])
 
 
 @pytest.fixture(scope="module")

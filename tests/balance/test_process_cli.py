@@ -12,7 +12,6 @@ from click.testing import CliRunner
 
 from ornitail.acquisition.sweep import run_sweep
 from ornitail.acquisition.sweep_plan import plan_from_document
-from ornitail.balance.process_cli import process_command
 from ornitail.core.cli import main
 
 SHORT_PLAN = {
@@ -23,7 +22,6 @@ SHORT_PLAN = {
     "protocol": {"steady_state_repeats": 1, "record_s": 0.6, "tailless_points": "steady_state"},
     "settle": {"stable_for_s": 0.3, "timeout_s": 60},
 }
-REGISTERED = "process" in main.commands
 
 
 @pytest.fixture
@@ -34,12 +32,8 @@ def simulated_time_scale():
 
 @pytest.fixture
 def cli():
-    """The ``ornitail`` group with ``process`` on it (as core/cli.py registers it), run in-process."""
-    if not REGISTERED:
-        main.add_command(process_command)
-    yield lambda *arguments: CliRunner().invoke(main, [str(argument) for argument in arguments])
-    if not REGISTERED:
-        main.commands.pop("process")
+    """The ``ornitail`` group, run in-process."""
+    return lambda *arguments: CliRunner().invoke(main, [str(argument) for argument in arguments])
 
 
 @pytest.fixture
@@ -125,10 +119,6 @@ def test_process_writes_tables_figures_and_one_json_object(recorded_sweep, cli, 
 
     # Once through a real process, with the console script.
     console_script = Path(sys.executable).parent / "ornitail"
-    if not REGISTERED:
-        pytest.skip(
-            "ornitail process is not registered in core/cli.py yet; the in-process checks passed"
-        )
     completed = subprocess.run(
         [str(console_script), "process", "--plan", "short-process", "--data-root", str(data_root),
          "--out", str(tmp_path / "o3"), "--json"],
