@@ -1,17 +1,30 @@
-"""A hard deadline for every test and for the end of the session: a hang fails fast, with every thread's stack.
+"""A hard deadline for every test and for the end of the session: a hang fails fast, with every thread's stack;
+and the README's demo run in the background while the tests that do not drive a simulated rig run.
 
 pytest-timeout (``timeout`` in pyproject.toml, signal method) fails a test that runs too long, but only when the
 main thread gets back to Python bytecode: a test stuck in native code (a Qt call, a lock taken in C) or whose
 timeout lands inside a Qt slot (where PySide swallows it) would hang CI until its own limit. ``faulthandler``'s
 watchdog thread needs no GIL: past ``HARD_DEADLINE_S`` it writes every thread's stack to the report and ends
 the process with exit status 1. The same watchdog covers interpreter shutdown (threads joined at exit).
+
+`ornitail demo` (tests/test_demo.py) spends about two minutes mostly waiting on its simulated rig (the fan spinning
+up and down around 27 wind-off tares; a quarter of one core). When the session holds the demo's test, the demo is
+started as its own process when collection ends, and the tests that drive no simulated rig (simulator, flight,
+design, gap, calibration, the bad-input corpus) run first, while it records; the demo's test then only reads what
+it printed. Tests that drive a simulated rig run after those, so at most one rig streams at a time (the sweep tests
+count samples exactly and are kept off a loaded link). The demo retakes a record that lost samples, so a busy
+neighbour cannot change its results, only its duration.
 """
 
 from __future__ import annotations
 
 import faulthandler
 import os
+import shutil
+import subprocess
 import sys
+import tempfile
+from pathlib import Path
 
 import pytest
 
@@ -20,7 +33,86 @@ HARD_DEADLINE_S = 480.0
 SHUTDOWN_DEADLINE_S = 120.0
 """From the end of the session to the end of the process, s."""
 
+DEMO_TEST_FILE = "tests/test_demo.py"
+RIG_BOUND_PATHS = (
+    "tests/acquisition/",
+    "tests/balance/",
+    "tests/gui/",
+    "tests/benchmarks/",
+    "tests/gap/test_tunnel_recordings.py",
+    DEMO_TEST_FILE,
+)
+"""Tests that drive a simulated rig or stream through a transport at rate (run after the others)."""
+RIG_FIXTURES = {"simulated_rig", "simulated_daq", "simulated_netcanoem", "simulated_netft"}
+
 _terminal_fd: int | None = None
+
+
+class BackgroundDemo:
+    """`ornitail demo --json` in its own process and data folder, started once per session."""
+
+    def __init__(self) -> None:
+        self.folder = Path(tempfile.mkdtemp(prefix="ornitail-demo-"))
+        self.process = subprocess.Popen(
+            [
+                str(Path(sys.executable).parent / "ornitail"),
+                "demo",
+                "--data-root",
+                str(self.folder),
+                "--json",
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        self._output: tuple[int, str, str] | None = None
+
+    def result(self, timeout_s: float) -> tuple[int, str, str]:
+        """Exit code, standard output and standard error, waiting up to ``timeout_s`` for the demo to end."""
+        if self._output is None:
+            stdout, stderr = self.process.communicate(timeout=timeout_s)
+            self._output = (self.process.returncode, stdout, stderr)
+        return self._output
+
+    def close(self) -> None:
+        if self.process.poll() is None:
+            self.process.terminate()
+            self.process.communicate(timeout=60)
+        shutil.rmtree(self.folder, ignore_errors=True)
+
+
+_background_demo: BackgroundDemo | None = None
+
+
+def _drives_a_rig(item: pytest.Item) -> bool:
+    return item.nodeid.startswith(RIG_BOUND_PATHS) or bool(
+        RIG_FIXTURES & set(getattr(item, "fixturenames", ()))
+    )
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Tests that drive no simulated rig first (the demo records meanwhile), in their usual order otherwise."""
+    items.sort(key=_drives_a_rig)
+
+
+def pytest_collection_finish(session: pytest.Session) -> None:
+    global _background_demo
+    if not session.config.option.collectonly and any(
+        item.nodeid.startswith(DEMO_TEST_FILE) for item in session.items
+    ):
+        _background_demo = BackgroundDemo()
+
+
+@pytest.fixture(scope="session")
+def background_demo() -> BackgroundDemo:
+    """The demo started when collection ended (see the module notes)."""
+    assert _background_demo is not None, "the demo starts only when its test file is collected"
+    return _background_demo
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    if _background_demo is not None:
+        _background_demo.close()
 
 
 def _terminal() -> int:
