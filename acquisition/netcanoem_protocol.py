@@ -16,6 +16,8 @@ import struct
 
 import numpy as np
 
+from ornitail.core.constants import STANDARD_GRAVITY_M_S2
+
 DEFAULT_BASE_ID = 0x20
 OPCODE_READ_GAUGES = 0x0
 OPCODE_GAUGES_SECOND_REPLY = 0x1
@@ -40,7 +42,7 @@ FORCE_UNIT_CODES_TO_N = {
     2: 1.0,
     3: 4448.2216152605,
     4: 1000.0,
-    5: 9.80665,
+    5: STANDARD_GRAVITY_M_S2,
     6: 0.00980665,
 }
 TORQUE_UNIT_CODES_TO_N_M = {

@@ -25,6 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ornitail.core.constants import STANDARD_GRAVITY_M_S2
+
 RDT_PORT = 49152
 REQUEST_HEADER = 0x1234
 COMMAND_STOP_STREAMING = 0x0000
@@ -59,8 +61,8 @@ FORCE_UNITS_TO_N = {
     "n": 1.0,
     "klbf": 4448.2216152605,
     "kn": 1000.0,
-    "kgf": 9.80665,
-    "kg": 9.80665,
+    "kgf": STANDARD_GRAVITY_M_S2,
+    "kg": STANDARD_GRAVITY_M_S2,
     "gf": 0.00980665,
     "g": 0.00980665,
 }

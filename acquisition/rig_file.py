@@ -16,6 +16,7 @@ from ornitail.acquisition.daq_protocol import DEFAULT_BAUD, link_ceiling_frames_
 from ornitail.acquisition.line_instrument_connection import DEFAULT_LINE_BAUD
 from ornitail.acquisition.netcanoem_protocol import DEFAULT_BASE_ID, gauge_sample_rate_ceiling_hz
 from ornitail.calibration.tool_transform import ToolTransform
+from ornitail.core.constants import DELFLY_GEAR_RATIO
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import read_toml_file
 from ornitail.core.toml_table import TomlTable
@@ -207,7 +208,7 @@ def read_rig_file(path: str | Path) -> RigDescription:
         fan=line_port(fan),
         strut=line_port(strut),
         motor=line_port(motor),
-        gear_ratio=motor.number("gear_ratio", 21.33, positive=True),
+        gear_ratio=motor.number("gear_ratio", DELFLY_GEAR_RATIO, positive=True),
         limits=SafetyLimits(
             pitch_min_rad=math.radians(pitch_min_deg),
             pitch_max_rad=math.radians(pitch_max_deg),

@@ -54,10 +54,10 @@ from ornitail.balance.tare_drift import (
 )
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.calibration.flapping_frequency_check import (
-    FLAPPING_GEAR_RATIO,
     check_flapping_frequency,
 )
 from ornitail.calibration.tool_transform import ToolTransform
+from ornitail.core.constants import DELFLY_GEAR_RATIO, STANDARD_GRAVITY_M_S2
 from ornitail.core.errors import UserInputError
 
 GAUGE_CHANNELS = tuple(f"gauge_{index}_v" for index in range(6))
@@ -67,7 +67,7 @@ SATURATION_COLUMNS = (
     "tare_saturated_samples",
     "tare_over_range_samples",
 )
-BALANCE_RESOLUTION_N = 0.149e-3 * 9.80665
+BALANCE_RESOLUTION_N = 0.149e-3 * STANDARD_GRAVITY_M_S2
 """Nano-17 force resolution, 0.149 gram-force (docs/background.md section 3), N."""
 REPEATABILITY_SIGNIFICANCE = 0.01
 """Chance of a false alarm of the repeatability check: repeats scatter beyond their errors below this p-value."""
@@ -442,11 +442,11 @@ def recorded_gear_ratio(recording: Recording) -> float:
     """The motor's gear ratio the run was recorded with (``run.json`` ``rig.gear_ratio``; runs recorded before it
     was stored: the DelFly II's 21.33)."""
     value = recording.metadata.get("rig", {}).get("gear_ratio")
-    return FLAPPING_GEAR_RATIO if value is None else float(value)
+    return DELFLY_GEAR_RATIO if value is None else float(value)
 
 
 def frequency_cross_check_record(
-    hall_frequency_hz: float, motor_rpm: float | None, gear_ratio: float = FLAPPING_GEAR_RATIO
+    hall_frequency_hz: float, motor_rpm: float | None, gear_ratio: float = DELFLY_GEAR_RATIO
 ) -> dict[str, float | bool]:
     """Hall against motor flapping frequency for one point: ``motor_rpm``, ``f_motor_hz`` (rpm / 60 /
     ``gear_ratio``), ``f_disagreement`` ((Hall - motor) / motor) and ``f_disagrees`` (beyond 2 %); no rpm reading
@@ -571,7 +571,7 @@ def frequency_check_warnings(table: pd.DataFrame) -> list[str]:
         lines.append(
             f"warning: {row['run_id']} set point {int(row['plan_point_index'])} ({row['sweep']}): Hall "
             f"{row['f_hall_hz']:.3f} Hz vs motor {row['f_motor_hz']:.3f} Hz (rpm / 60 / "
-            f"{row.get('gear_ratio', FLAPPING_GEAR_RATIO):g}), {100 * row['f_disagreement']:+.1f} %: slipping "
+            f"{row.get('gear_ratio', DELFLY_GEAR_RATIO):g}), {100 * row['f_disagreement']:+.1f} %: slipping "
             "gear, missed Hall "
             "edges or a wrong rpm channel"
         )

@@ -13,12 +13,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-FLAPPING_GEAR_RATIO = 21.33
+from ornitail.core.constants import DELFLY_GEAR_RATIO
+
 DEFAULT_RELATIVE_TOLERANCE = 0.02
 
 
 def flapping_frequency_hz_from_motor_rpm(
-    motor_rpm: float | np.ndarray, gear_ratio: float = FLAPPING_GEAR_RATIO
+    motor_rpm: float | np.ndarray, gear_ratio: float = DELFLY_GEAR_RATIO
 ) -> float | np.ndarray:
     """Return the flapping frequency (Hz) implied by the motor speed ``motor_rpm`` (rev/min)."""
     return np.asarray(motor_rpm, dtype=float) / 60.0 / gear_ratio
@@ -51,7 +52,7 @@ def check_flapping_frequency(
     hall_frequency_hz: float | np.ndarray,
     motor_rpm: float | np.ndarray,
     tolerance: float = DEFAULT_RELATIVE_TOLERANCE,
-    gear_ratio: float = FLAPPING_GEAR_RATIO,
+    gear_ratio: float = DELFLY_GEAR_RATIO,
 ) -> FlappingFrequencyCheck:
     """Compare the Hall-derived flapping frequency with ``motor_rpm / 60 / gear_ratio``.
 

@@ -20,7 +20,8 @@ from typing import Any
 
 import numpy as np
 
-GRAVITY_M_S2 = 9.80665
+from ornitail.core.constants import STANDARD_GRAVITY_M_S2
+
 STATE_NAMES = ("q", "u", "w", "theta")
 A_MATRIX_DERIVATIVES = ("Mq", "Mu", "Mw", "Xq", "Xu", "Xw", "Zq", "Zu", "Zw")
 
@@ -56,8 +57,8 @@ def a_matrix_entries(
     w0 = -v0_m_s * sin_theta
     return [
         [d["Mq"] / i, d["Mu"] / i, d["Mw"] / i, 0.0],
-        [d["Xq"] / m - w0, d["Xu"] / m, d["Xw"] / m, -GRAVITY_M_S2 * cos_theta],
-        [d["Zq"] / m + u0, d["Zu"] / m, d["Zw"] / m, -GRAVITY_M_S2 * sin_theta],
+        [d["Xq"] / m - w0, d["Xu"] / m, d["Xw"] / m, -STANDARD_GRAVITY_M_S2 * cos_theta],
+        [d["Zq"] / m + u0, d["Zu"] / m, d["Zw"] / m, -STANDARD_GRAVITY_M_S2 * sin_theta],
         [1.0, 0.0, 0.0, 0.0],
     ]
 

@@ -18,11 +18,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import root
 
+from ornitail.core.constants import STANDARD_GRAVITY_M_S2
 from ornitail.sim.configuration import VehicleConfiguration
 from ornitail.sim.effects import EffectSet
 from ornitail.sim.model import PreparedVehicle
 from ornitail.sim.motor import load_factor, throttle_for_frequency
-from ornitail.sim.parameters import GRAVITY_M_S2
 
 STATE_NAMES = ("q", "u", "w", "theta")
 DERIVATIVE_NAMES = ("Mq", "Mu", "Mw", "Xq", "Xu", "Xw", "Zq", "Zu", "Zw", "Mde", "Xde", "Zde")
@@ -81,8 +81,8 @@ class FlightDynamics:
         return np.array(
             [
                 moment / self.vehicle.effective_iyy_kg_m2,
-                x / mass - GRAVITY_M_S2 * math.sin(theta) - q * w,
-                z / mass + GRAVITY_M_S2 * math.cos(theta) + q * u,
+                x / mass - STANDARD_GRAVITY_M_S2 * math.sin(theta) - q * w,
+                z / mass + STANDARD_GRAVITY_M_S2 * math.cos(theta) + q * u,
                 q,
             ]
         )
@@ -90,7 +90,7 @@ class FlightDynamics:
     def trim(self) -> TrimState:
         """Level-flight steady state at neutral elevator (see module docstring)."""
         vehicle = self.vehicle
-        weight = vehicle.mass_kg * GRAVITY_M_S2
+        weight = vehicle.mass_kg * STANDARD_GRAVITY_M_S2
 
         def residual(unknowns: np.ndarray) -> np.ndarray:
             theta, speed, frequency = unknowns
@@ -170,7 +170,7 @@ def a_matrix_from_derivatives(
 ) -> np.ndarray:
     """The A matrix of docs/background.md section 5 built from dimensional derivatives and trim."""
     d, m, i = derivatives, mass_kg, iyy_kg_m2
-    g, theta = GRAVITY_M_S2, trim.theta_rad
+    g, theta = STANDARD_GRAVITY_M_S2, trim.theta_rad
     return np.array(
         [
             [d["Mq"] / i, d["Mu"] / i, d["Mw"] / i, 0.0],

@@ -10,9 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-GRAVITY_M_S2 = 9.81
 AIR_DENSITY_KG_M3 = 1.20
-MOTOR_TO_FLAP_GEAR_RATIO = 21.33  # study: flapping frequency = motor rpm / 60 / 21.33
 
 
 @dataclass(frozen=True)

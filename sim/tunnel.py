@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 from scipy.signal import lfilter
 
+from ornitail.core.constants import DELFLY_GEAR_RATIO, STANDARD_GRAVITY_M_S2
 from ornitail.core.errors import UserInputError, require_finite
 from ornitail.sim.configuration import VehicleConfiguration, default_configuration
 from ornitail.sim.effects import EffectSet
@@ -31,7 +32,6 @@ from ornitail.sim.instruments import (
     thermocouple_voltage,
 )
 from ornitail.sim.model import PreparedVehicle
-from ornitail.sim.parameters import GRAVITY_M_S2, MOTOR_TO_FLAP_GEAR_RATIO
 from ornitail.sim.wings import periodic_wing_loads
 
 CHANNELS: tuple[str, ...] = (
@@ -72,7 +72,7 @@ def sensor_frame_loads(
 
 def body_weight_components(mass_kg: float, pitch_rad: float) -> tuple[float, float]:
     """Weight along x_b and z_b (N) at pitch theta (docs/frames.md)."""
-    weight = mass_kg * GRAVITY_M_S2
+    weight = mass_kg * STANDARD_GRAVITY_M_S2
     return -weight * math.sin(pitch_rad), weight * math.cos(pitch_rad)
 
 
@@ -252,12 +252,7 @@ class TunnelSignalSource:
     @property
     def motor_rpm(self) -> float:
         """Current motor rpm including speed wander and tachometer noise."""
-        rpm = (
-            self.flapping_frequency_hz
-            * (1.0 + self._jitter_state)
-            * 60.0
-            * MOTOR_TO_FLAP_GEAR_RATIO
-        )
+        rpm = self.flapping_frequency_hz * (1.0 + self._jitter_state) * 60.0 * DELFLY_GEAR_RATIO
         if self.flapping_frequency_hz <= 0:
             return 0.0
         return float(rpm + self._generator.normal(0.0, _RPM_NOISE))
@@ -337,7 +332,7 @@ class TunnelSignalSource:
         )
         hall = hall_voltage(phase) + self.conditions.hall_noise_v * noise[:, 2]
         self._time_s = float(times[-1] + 1.0 / rate)
-        rpm = frequency * 60.0 * MOTOR_TO_FLAP_GEAR_RATIO
+        rpm = frequency * 60.0 * DELFLY_GEAR_RATIO
         if motor_on:
             rpm = rpm + self._generator.normal(0.0, _RPM_NOISE, count)
         return np.column_stack([gauges, hotwire, thermocouple, hall]), rpm

@@ -9,7 +9,7 @@ from ornitail.balance.cycle_averages import segment_sums
 from ornitail.balance.phase_loads import phase_averaged_loads
 from ornitail.balance.point_loads import cycle_averaged_loads, tare_volts_and_covariance
 from ornitail.balance.sweep_table import frequency_check_warnings, frequency_cross_check_record
-from ornitail.calibration.flapping_frequency_check import FLAPPING_GEAR_RATIO
+from ornitail.core.constants import DELFLY_GEAR_RATIO
 from ornitail.core.errors import UserInputError
 from ornitail.sim.effects import EffectSet
 from ornitail.sim.tunnel import TunnelSignalSource
@@ -148,7 +148,7 @@ def test_segment_sums_match_a_plain_loop_for_any_spans():
     ("rpm_factor", "flagged"), [(1.0, False), (1.015, False), (0.95, True), (1.05, True)]
 )
 def test_hall_frequency_is_cross_checked_against_motor_rpm(rpm_factor, flagged):
-    rpm = FREQUENCY_HZ * 60 * FLAPPING_GEAR_RATIO * rpm_factor
+    rpm = FREQUENCY_HZ * 60 * DELFLY_GEAR_RATIO * rpm_factor
     record = frequency_cross_check_record(FREQUENCY_HZ, rpm)
     assert record["f_motor_hz"] == pytest.approx(FREQUENCY_HZ * rpm_factor)
     assert record["f_disagreement"] == pytest.approx(1 / rpm_factor - 1)
@@ -162,7 +162,7 @@ def test_missing_rpm_is_not_flagged_and_disagreements_give_one_warning_line_each
 
     rows = [
         {"run_id": "r1", "plan_point_index": index, "sweep": "frequency", "f_hall_hz": 13.5,
-         **frequency_cross_check_record(13.5, 13.5 * 60 * FLAPPING_GEAR_RATIO * factor)}
+         **frequency_cross_check_record(13.5, 13.5 * 60 * DELFLY_GEAR_RATIO * factor)}
         for index, factor in enumerate((1.0, 0.9, 1.2))
     ]  # fmt: skip
     warnings = frequency_check_warnings(pd.DataFrame(rows))

@@ -7,12 +7,12 @@ import pytest
 
 from ornitail.calibration.data_files import EXAMPLE_TUNNEL_TABLE_PATH
 from ornitail.calibration.flapping_frequency_check import (
-    FLAPPING_GEAR_RATIO,
     check_flapping_frequency,
     flapping_frequency_hz_from_motor_rpm,
 )
 from ornitail.calibration.thermocouple_amplifier import temperature_k_from_amplifier_voltage
 from ornitail.calibration.tunnel_table import TunnelVelocityTable
+from ornitail.core.constants import DELFLY_GEAR_RATIO
 from ornitail.core.errors import UserInputError
 
 
@@ -82,7 +82,7 @@ def test_ad8495_conversion_is_vectorised_and_refuses_nan():
 
 
 def test_flapping_frequency_from_motor_uses_the_gear_ratio():
-    assert FLAPPING_GEAR_RATIO == 21.33
+    assert DELFLY_GEAR_RATIO == 21.33
     # 12 798 rpm / 60 / 21.33 = 10.0 Hz
     assert flapping_frequency_hz_from_motor_rpm(12798.0) == pytest.approx(10.0, rel=1e-15)
 

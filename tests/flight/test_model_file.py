@@ -6,6 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from ornitail.core.constants import STANDARD_GRAVITY_M_S2
 from ornitail.core.errors import UserInputError
 from ornitail.flight.model_file import PRESET_DIRECTORY, load_model, preset_names
 from ornitail.sim.configuration import study_configuration
@@ -61,7 +62,7 @@ def test_the_delfly_preset_is_the_simulators_linear_model():
     constants = {
         "m": linear.mass_kg,
         "Iyy": linear.iyy_kg_m2,
-        "g": 9.81,
+        "g": STANDARD_GRAVITY_M_S2,
         "theta0": linear.trim.theta_rad,
         "u0": linear.trim.u0_m_s,
         "w0": linear.trim.w0_m_s,

@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
+from ornitail.core.constants import DELFLY_GEAR_RATIO, STANDARD_GRAVITY_M_S2
 from ornitail.core.errors import UserInputError
 from ornitail.sim.configuration import study_configuration
 from ornitail.sim.effects import EffectSet
 from ornitail.sim.instruments import HALL_HIGH_V, balance_calibration_matrix_si
-from ornitail.sim.parameters import GRAVITY_M_S2, MOTOR_TO_FLAP_GEAR_RATIO
 from ornitail.sim.tunnel import (
     CHANNELS,
     TunnelSignalSource,
@@ -74,7 +74,7 @@ def test_wind_off_tare_is_the_weight_rotating_with_pitch(pitch_deg) -> None:
     volts = source.next_block(100)
     loads = (volts[:, :6] - source.gauges.bias_v) @ MATRIX.T
     theta = math.radians(pitch_deg)
-    weight = source.true_cycle_average.mass_kg * GRAVITY_M_S2
+    weight = source.true_cycle_average.mass_kg * STANDARD_GRAVITY_M_S2
     # sensor x = x_b, sensor z = -z_b (BalanceMounting): body weight (-W sin, 0, W cos)
     expected_force = np.array([-weight * math.sin(theta), 0.0, -weight * math.cos(theta)])
     np.testing.assert_allclose(loads[:, :3], np.tile(expected_force, (100, 1)), atol=1e-12)
@@ -96,7 +96,7 @@ def test_hall_pulses_count_the_flaps(frequency_hz) -> None:
     edges = _rising_edges(table.hall_v.to_numpy())
     assert abs(len(edges) - frequency_hz * 2.0) <= 1
     rpm = table.motor_rpm.mean()
-    assert rpm == pytest.approx(frequency_hz * 60 * MOTOR_TO_FLAP_GEAR_RATIO, rel=0.01)
+    assert rpm == pytest.approx(frequency_hz * 60 * DELFLY_GEAR_RATIO, rel=0.01)
 
 
 def test_phase_is_continuous_across_blocks_and_set_point_changes() -> None:
