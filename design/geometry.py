@@ -221,6 +221,14 @@ def study_tails() -> dict[str, StudyTail]:
     return tails
 
 
+def study_fuselages_x_h_m() -> dict[str, float]:
+    """The study's fuselages (package data ``design/data/fuselages.csv``, Table 1): letter -> tail position x_h
+    (m), in the table's order."""
+    text = resources.files("ornitail.design").joinpath("data/fuselages.csv").read_text()
+    rows = csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))
+    return {row["fuselage"]: float(row["x_h_mm"]) * 1e-3 for row in rows}
+
+
 def study_tail_geometry(tail_name: str, where: str = "tail") -> TailGeometry:
     """Geometry of a study tail by name; unknown names raise :class:`UserInputError`."""
     tails = study_tails()

@@ -54,6 +54,7 @@ from ornitail.design.geometry import (
     BASE_TAIL_CORNER_SETBACK_M,
     BASE_TAIL_SPAN_M,
     TailGeometry,
+    study_fuselages_x_h_m,
 )
 from ornitail.design.linear_model import (
     characteristic_polynomial,
@@ -61,8 +62,8 @@ from ornitail.design.linear_model import (
     quadratic_factor_coefficients,
 )
 
-FUSELAGE_X_H_M = {"a": 0.057, "b": 0.098, "d": 0.114, "c": 0.126}
-"""The study's fuselages (reference/fuselages.csv): tail position x_h in metres."""
+FUSELAGE_X_H_M = dict(sorted(study_fuselages_x_h_m().items(), key=lambda item: item[1]))
+"""The study's fuselages (``design/data/fuselages.csv``): tail position x_h in metres, shortest first."""
 OBJECTIVES = ("min-area", "max-damping", "closest")
 INTERVAL_KINDS = ("mean", "new")
 TARGET_NAMES = ("theta_ss", "v_ss", "f_ss", "damping_ratio", "natural_frequency")

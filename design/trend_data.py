@@ -28,7 +28,7 @@ from typing import Any
 
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import read_input_text, read_json_file
-from ornitail.design.geometry import TailGeometry, study_tails
+from ornitail.design.geometry import TailGeometry, study_fuselages_x_h_m, study_tails
 
 QUANTITIES = (
     "theta_ss_rad",
@@ -54,7 +54,7 @@ ALL_QUANTITIES = QUANTITIES + MASS_QUANTITIES
 
 STUDY_SIGN_FLIPPED_DERIVATIVES = ("Mu", "Mw", "Xq", "Zq")
 """Table 4 derivatives whose published sign is flipped into ornitail's frame (docs/frames.md)."""
-STUDY_FUSELAGE_X_H_MM = {"a": 57.0, "b": 98.0, "c": 126.0, "d": 114.0}
+STUDY_FUSELAGE_X_H_MM = {letter: 1e3 * x_h_m for letter, x_h_m in study_fuselages_x_h_m().items()}
 """Fuselage letter -> x_h (mm), Table 1 of the study (``design/data/fuselages.csv``)."""
 
 _DERIVED_SIGMA_MAX_RELATIVE_ROUNDING = 0.5
