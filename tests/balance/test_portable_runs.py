@@ -19,6 +19,7 @@ from ornitail.acquisition.sweep import run_sweep
 from ornitail.acquisition.sweep_plan import plan_from_document
 from ornitail.balance.process_cli import process_command
 from ornitail.core.cli import main
+from ornitail.core.progress import PROGRESS_LINE
 
 PLAN = {
     "plan": {"name": "portable"},
@@ -44,6 +45,11 @@ def process(*arguments):
             main.commands.pop("process")
 
 
+def _messages(stderr: str) -> list[str]:
+    """stderr's lines without the progress lines (stderr is not a terminal here)."""
+    return [line for line in stderr.splitlines() if not PROGRESS_LINE.match(line)]
+
+
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory):
     """``(lab folder, run directories, reference cycle-averages table)`` of one sweep processed where it was
@@ -58,7 +64,7 @@ def lab(tmp_path_factory):
     assert result.status == "completed"
     processed = process(*result.run_directories, "--out", lab / "out")
     assert processed.exit_code == 0, processed.stderr
-    assert not processed.stderr
+    assert not _messages(processed.stderr)
     return lab, result.run_directories, pd.read_csv(lab / "out" / "cycle-averages.csv")
 
 
@@ -128,7 +134,7 @@ def test_an_override_is_used_and_one_with_other_content_only_with_a_warning(
 ):
     same = shutil.copy(lab[0] / "calibration" / "FT8884.moved", tmp_path / "same.cal")
     result = process(*moved_runs, "--cal", same, "--out", tmp_path / "same")
-    assert result.exit_code == 0 and not result.stderr, result.stderr
+    assert result.exit_code == 0 and not _messages(result.stderr), result.stderr
     assert {
         entry["source"] for entry in json.loads(result.stdout)["calibration_files"].values()
     } == {"override"}
@@ -137,7 +143,7 @@ def test_an_override_is_used_and_one_with_other_content_only_with_a_warning(
     other.write_bytes(same.read_bytes() + b"\n")  # other bytes, same matrix
     result = process(*moved_runs, "--cal", other, "--out", tmp_path / "other")
     assert result.exit_code == 0, result.stderr
-    warnings = result.stderr.strip().splitlines()
+    warnings = _messages(result.stderr)
     assert len(warnings) == len(moved_runs)
     assert all(line.startswith(f"warning: {other}: used as balance file") for line in warnings)
     assert all("differs from the file the run was recorded with" in line for line in warnings)
