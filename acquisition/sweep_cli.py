@@ -51,6 +51,7 @@ from ornitail.acquisition.sweep_plan import SweepPlan, load_plan
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import prepare_output_directory
 from ornitail.core.output import emit, json_option
+from ornitail.core.progress import Progress
 
 EXIT_ABORTED = 130
 """Ctrl-C (SIGINT, 128 + 2): stopped after the current point (first) or at once (second)."""
@@ -267,23 +268,16 @@ def _connect_and_sweep(
     interrupt: SweepInterrupted | None = None
     try:
         rig.connect()
-        with click.progressbar(
-            length=len(plan.set_points),
-            label=f"sweep {plan.name}",
-            file=sys.stderr,
-            show_eta=True,
-            show_pos=True,
-            item_show_func=lambda point: point.label if point else "",
-        ) as bar:
+        with Progress(f"sweep {plan.name}", len(plan.set_points), "set points") as progress:
 
             def on_event(event: SweepEvent) -> None:
-                with contextlib.suppress(OSError):  # a closed terminal must not fail the sweep
-                    if event.stage == "recorded":
-                        bar.update(event.completed - bar.pos, event.set_point)
-                    elif event.stage == "moving" and bar.pos < event.completed:
-                        bar.update(event.completed - bar.pos)
-                    elif event.stage == "warning":
-                        click.echo(f"\n{event.message}", err=True)
+                label = event.set_point.label if event.set_point else ""
+                if event.stage in ("moving", "recorded"):
+                    progress.update(event.completed, event.eta_s, label)
+                elif event.stage == "tail_change":
+                    progress.stage("tail change")
+                elif event.stage == "warning":
+                    progress.message(event.message)
 
             result = run_sweep(
                 plan,

@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 
 from ornitail.balance.cycle_averages import phase_average
 from ornitail.balance.hall_cycles import HallEdgeSettings, flap_cycles
@@ -89,3 +90,27 @@ def phase_averaged_loads(
         cycle_count=n_cycles,
         flapping_frequency_hz=cycles.mean_frequency_hz,
     )
+
+
+def phase_average_table(by_tail_state: dict[bool, PhaseAveragedLoads | None]) -> pd.DataFrame:
+    """Phase-averaged loads as a table, one row per phase bin and tail state (``<cfg>-phase-average.csv``).
+
+    Columns: ``tailed``, ``phase`` (bin centre, fraction of the cycle from the Hall edge), ``cycles``,
+    ``f_hall_hz`` (Hz), and for each load of ``BODY_LOAD_NAMES`` its mean (N or N m) and ``<load>_std``, the
+    standard deviation over cycles (same unit).
+    """
+    frames = []
+    for tailed, loads in by_tail_state.items():
+        if loads is None:
+            continue
+        columns: dict[str, object] = {
+            "tailed": tailed,
+            "phase": loads.phase,
+            "cycles": loads.cycle_count,
+            "f_hall_hz": loads.flapping_frequency_hz,
+        }
+        for index, name in enumerate(BODY_LOAD_NAMES):
+            columns[name] = loads.mean[:, index]
+            columns[f"{name}_std"] = loads.spread[:, index]
+        frames.append(pd.DataFrame(columns))
+    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import sys
-import time
 from pathlib import Path
 from typing import Any
 
@@ -13,31 +11,11 @@ from ornitail.acquisition.calibration_copies import CalibrationSources
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import prepare_output_directory
 from ornitail.core.output import emit, json_option
+from ornitail.core.progress import Progress
 
 PROGRESS_DELAY_S = 1.0
-"""The progress bar appears only once processing has taken this long."""
-
-
-class _DelayedProgress:
-    """A click progress bar on stderr that shows itself only after :data:`PROGRESS_DELAY_S`."""
-
-    def __init__(self) -> None:
-        self.started_s = time.monotonic()
-        self.bar: Any = None
-
-    def __call__(self, done: int, total: int) -> None:
-        if self.bar is None:
-            if time.monotonic() - self.started_s < PROGRESS_DELAY_S:
-                return
-            self.bar = click.progressbar(
-                length=total, label="processing set points", file=sys.stderr, show_pos=True
-            )
-            self.bar.__enter__()
-        self.bar.update(done - self.bar.pos)
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.__exit__(None, None, None)
+"""In a terminal the progress bar appears only once processing has taken this long (s); in a log, progress lines
+are timestamped and start at once (``ornitail.core.progress``)."""
 
 
 def _render(result: dict[str, Any]) -> str:
@@ -127,12 +105,12 @@ def process_command(
     run_directories = (
         newest_sweep_chain(data_root or default_data_root(), plan_name) if plan_name else list(runs)
     )
-    progress = _DelayedProgress()
+    progress = Progress("process", 0, "set points", bar_delay_s=PROGRESS_DELAY_S)
     try:
         result = process_runs(
             run_directories,
             out,
-            on_progress=progress,
+            on_progress=lambda done, total: progress.update(done, total=total),
             keep_saturated=keep_saturated,
             calibration_sources=CalibrationSources(
                 search_path=search_path,

@@ -22,7 +22,11 @@ from ornitail.acquisition.catalog import RunCatalog
 from ornitail.acquisition.sweep import previous_sweep_chain
 from ornitail.balance.condition_correction import at_reference_conditions
 from ornitail.balance.derivatives import StabilityDerivatives, fit_stability_derivatives
-from ornitail.balance.phase_loads import PhaseAveragedLoads, phase_averaged_loads
+from ornitail.balance.phase_loads import (
+    PhaseAveragedLoads,
+    phase_average_table,
+    phase_averaged_loads,
+)
 from ornitail.balance.processing_plots import (
     phase_average_figure,
     save_figure,
@@ -142,6 +146,11 @@ def _process_configuration(
         record["derivatives"] = fit.to_json_dict()
     tailed_phase = _steady_state_phase_average(points, tailed=True)
     tailless_phase = _steady_state_phase_average(points, tailed=False)
+    phase_table = phase_average_table({True: tailed_phase, False: tailless_phase})
+    if len(phase_table):
+        path = out / f"{slug}-phase-average.csv"
+        phase_table.to_csv(path, index=False)
+        written.append(path)
     if tailed_phase is not None and fit is not None:
         steady = fit.steady_state
         where = (

@@ -88,6 +88,10 @@ _AREA_COMMANDS = {
     "design": LazyCommand(
         "ornitail.design.cli:design_group", "Tail design: geometry, trend fits, proposals."
     ),
+    "export": LazyCommand(
+        "ornitail.core.export_cli:export_command",
+        "Export run directories or processed tables (CSV) to MATLAB, Parquet or NetCDF with units.",
+    ),
     "flight": LazyCommand(
         "ornitail.flight.cli:flight_group",
         "Free-flight system identification.",

@@ -4,15 +4,14 @@ Input: a campaign file (``--campaign``), flight logs labelled by configuration
 (``--log S3@98=flight.csv``, repeatable) or simulated flights (``--simulate S3@98``,
 repeatable). ``--selection-rule``, ``--glitch-rule`` and ``--input-hold`` override the campaign
 file's rules (defaults: the study's rules, the model's own input hold). Output:
-``representative_models.csv`` / ``.json`` and the pictures (PNG and PDF) in ``--out``; a progress
-bar on stderr; with ``--json`` exactly one JSON object on stdout.
+``representative_models.csv`` / ``.json`` and the pictures (PNG and PDF) in ``--out``; progress on
+stderr (``ornitail.core.progress``: a bar in a terminal, timestamped lines in a log); with ``--json`` exactly one
+JSON object on stdout.
 """
 
 from __future__ import annotations
 
-import io
 import math
-import sys
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -22,6 +21,7 @@ import click
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import check_input_file, prepare_output_directory
 from ornitail.core.output import emit, json_option
+from ornitail.core.progress import Progress
 from ornitail.flight.campaign import run_campaign
 from ornitail.flight.campaign_file import (
     DEFAULT_SEED,
@@ -276,21 +276,14 @@ def campaign_command(
     _check_inputs(campaign)
     prepare_output_directory(out_directory)
     count = len(campaign.configurations)
-    with click.progressbar(
-        length=count * PROGRESS_STEPS_PER_CONFIGURATION,
-        label="flight campaign",
-        file=sys.stderr if sys.stderr.isatty() else io.StringIO(),  # a log gets no progress bar
-        show_eta=True,
-        item_show_func=lambda note: note or "",
-    ) as bar:
+    total = count * PROGRESS_STEPS_PER_CONFIGURATION
+    with Progress("flight campaign", total, "steps") as bar:
 
         def progress(index: int, fraction: float, note: str) -> None:
-            target = int(round((index + fraction) * PROGRESS_STEPS_PER_CONFIGURATION))
-            bar.update(max(0, target - bar.pos), note)
+            bar.update(int(round((index + fraction) * PROGRESS_STEPS_PER_CONFIGURATION)), item=note)
 
         results = run_campaign(campaign, progress)
-    if not sys.stderr.isatty():  # a log gets one line once done, so a refusal stays one line
-        click.echo(f"flight campaign: {count} configuration(s) analysed", err=True)
+        bar.update(total, item=f"{count} configuration(s) analysed")
     info = {
         "seed": campaign.seed,
         "model": campaign.model,

@@ -11,6 +11,7 @@ import click
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import prepare_output_directory, prepare_output_file
 from ornitail.core.output import emit, json_option, to_jsonable
+from ornitail.core.progress import Progress
 
 # The diagnosis, example data and benchmark (numpy, scipy, casadi, matplotlib) are imported inside the
 # commands: `ornitail gap --help` stays fast.
@@ -181,10 +182,10 @@ def benchmark_command(
 
     if out is not None:
         prepare_output_file(out)
-    with click.progressbar(
-        length=cases, label="gap benchmark", file=click.get_text_stream("stderr")
-    ) as bar:
-        result = run_benchmark(cases, seed, manoeuvres, progress=bar.update)
+    with Progress("gap benchmark", cases, "cases") as bar:
+        result = run_benchmark(
+            cases, seed, manoeuvres, progress=lambda step: bar.update(bar.done + step)
+        )
     if out is not None:
         out.write_text(json.dumps(to_jsonable(result), indent=1))
         result["written"] = str(out)

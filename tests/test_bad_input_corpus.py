@@ -203,6 +203,7 @@ FILE_SLOTS: dict[str, tuple[str, tuple[str, ...]]] = {
             "{ws}/out",
         ),
     ),
+    "export-csv": (".csv", ("export", "{f}", "--format", "mat", "--out", "{ws}/out")),
     "gui-rig": (".toml", ("gui", "--rig", "{f}")),
     "sim-tunnel-rig": (
         ".toml",
@@ -254,6 +255,40 @@ for damage, (named, problem) in RUN_DAMAGE.items():
         "{ws}/out/process",
         expect=(named, problem),
     )
+for damage, (named, problem) in RUN_DAMAGE.items():
+    case(
+        "run-directory",
+        f"export-{damage}",
+        "export",
+        f"{{ws}}/runs/{damage}",
+        "--format",
+        "netcdf",
+        "--out",
+        "{ws}/out/export",
+        expect=(named, problem),
+    )
+case(
+    "run-directory",
+    "export-missing",
+    "export",
+    "{ws}/runs/none",
+    "--format",
+    "mat",
+    "--out",
+    "{ws}/out",
+    expect="not found",
+)
+case(
+    "run-directory",
+    "export-a-toml-file",
+    "export",
+    "{ws}/ok/plan.toml",
+    "--format",
+    "mat",
+    "--out",
+    "{ws}/out",
+    expect=("plan.toml", "not a run directory or a CSV table"),
+)
 case(
     "run-directory",
     "process-missing-directory",

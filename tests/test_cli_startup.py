@@ -13,6 +13,7 @@ COMMANDS = {
     "calibration",
     "demo",
     "design",
+    "export",
     "flight",
     "gap",
     "gui",

@@ -2,6 +2,7 @@
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -54,6 +55,12 @@ def test_sweep_command_records_and_prints_one_json_object(tmp_path):
     assert completed.returncode == 0, completed.stderr
     result = json.loads(completed.stdout)
     assert result["status"] == "completed"
+    # stderr is a pipe, not a terminal: progress comes as timestamped lines, the last at the end.
+    assert re.search(
+        r"^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ sweep cli-short: 8/8 set points(, .+)?$",
+        completed.stderr,
+        re.MULTILINE,
+    ), completed.stderr
     # Tailed: tare, 2 steady states, 2 velocities; tailless: tare, 2 steady states.
     assert result["completed_points"] == result["total_points"] == 8
     assert len(result["run_directories"]) == 2

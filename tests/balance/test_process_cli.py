@@ -1,6 +1,7 @@
 """``ornitail process`` end to end: a short sweep recorded on the simulated rig, processed by the command."""
 
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -51,6 +52,10 @@ def test_process_writes_tables_figures_and_one_json_object(recorded_sweep, cli, 
     result = cli("process", *runs, "--out", out, "--json")
     assert result.exit_code == 0, result.stderr
     record = json.loads(result.stdout)  # exactly one JSON object
+    # stderr is not a terminal here: progress comes as timestamped lines, not a bar.
+    assert re.search(
+        r"^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ process: 5/5 set points$", result.stderr, re.MULTILINE
+    ), result.stderr
     assert record["runs"] == [str(path) for path in runs]
     table = pd.read_csv(out / "cycle-averages.csv")
     assert len(table) == 5  # tailed: steady state + 3 one-point sweeps; tailless: steady state
@@ -78,6 +83,12 @@ def test_process_writes_tables_figures_and_one_json_object(recorded_sweep, cli, 
     assert saved["derivatives"]["Zf"]["value"] == pytest.approx(derivatives["Zf"]["value"])
     derivative_table = pd.read_csv(out / "S3-xh98mm-derivatives.csv")
     assert {"name", "value", "sigma", "unit", "configuration"} <= set(derivative_table.columns)
+    phase_table = pd.read_csv(out / "S3-xh98mm-phase-average.csv")
+    assert set(phase_table["tailed"]) == {True, False}
+    assert {"phase", "cycles", "f_hall_hz", "x_n", "x_n_std", "m_n_m", "m_n_m_std"} <= set(
+        phase_table.columns
+    )
+    assert phase_table["phase"].between(0, 1).all() and phase_table["x_n_std"].gt(0).all()
 
     by_plan = cli(
         "process",

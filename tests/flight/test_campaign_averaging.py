@@ -8,6 +8,7 @@ import pytest
 
 from ornitail.core.errors import UserInputError
 from ornitail.flight.averaged_models import (
+    SAMPLE_RATE_TOLERANCE,
     covariance_weighted_mean,
     mean_of_parameters,
     time_averaged_response,
@@ -86,11 +87,13 @@ def test_merging_refuses_a_single_model_and_a_singular_covariance():
         covariance_weighted_mean(np.ones((2, 2)), [np.eye(2), np.zeros((2, 2))])
 
 
-def _manoeuvre(run_in_samples: int, after_samples: int, level: float) -> Manoeuvre:
-    rate = 100.0
+def _manoeuvre(
+    run_in_samples: int, after_samples: int, level: float, rate: float = 100.0, time_s=None
+) -> Manoeuvre:
     count = run_in_samples + after_samples
     signal = np.where(np.arange(count) >= run_in_samples, level, 0.0) + np.arange(count) * 1e-3
-    frame = pd.DataFrame({"time_s": np.arange(count) / rate, "q_rad_s": signal})
+    time_s = np.arange(count) / rate if time_s is None else time_s
+    frame = pd.DataFrame({"time_s": time_s, "q_rad_s": signal})
     return Manoeuvre(
         "synthetic",
         1,
@@ -110,3 +113,25 @@ def test_time_averaged_response_aligns_on_the_input_and_keeps_the_common_span():
     np.testing.assert_allclose(averaged["q_rad_s"].iloc[49], (0.049 + 0.069) / 2, rtol=1e-12)
     np.testing.assert_allclose(averaged["q_rad_s"].iloc[50], 2.0 + (0.050 + 0.070) / 2, rtol=1e-12)
     np.testing.assert_allclose(np.diff(averaged["time_s"]), 0.01)
+
+
+def test_time_averaging_accepts_rounded_and_jittered_time_and_clocks_within_the_tolerance():
+    """Timestamps written with 7 decimals, a clock with jitter, and a second logger's clock 50 ppm fast (two
+    crystals): one sample rate within SAMPLE_RATE_TOLERANCE (1e-4), so they are averaged."""
+    count = 2048
+    rounded = np.round(np.arange(count) / 512.0 + 12.3456789, 7) - 12.3456789
+    jitter = np.random.default_rng(3).normal(0.0, 0.02 / 512.0, count)
+    jittered = np.round(np.arange(count) / (512.0 * (1 + 5e-5)) + jitter, 7)
+    first = _manoeuvre(256, count - 256, 1.0, time_s=rounded)
+    second = _manoeuvre(256, count - 256, 3.0, time_s=jittered)
+    assert np.ptp(np.diff(rounded)) / (1 / 512.0) > 1e-6  # the median-step check refused these
+    averaged = time_averaged_response([first, second])
+    assert len(averaged) == count
+    np.testing.assert_allclose(np.diff(averaged["time_s"]), 1 / 512.0, rtol=SAMPLE_RATE_TOLERANCE)
+    np.testing.assert_allclose(averaged["q_rad_s"].iloc[256], 2.0 + 0.256, rtol=1e-12)
+
+
+def test_time_averaging_refuses_logs_at_different_sample_rates_naming_them():
+    first, second = _manoeuvre(50, 300, 1.0, rate=100.0), _manoeuvre(50, 300, 1.0, rate=101.0)
+    with pytest.raises(UserInputError, match=r"one sample rate.*100 Hz.*101 Hz.*0.0001 apart"):
+        time_averaged_response([first, second])

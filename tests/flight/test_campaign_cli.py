@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -110,6 +111,29 @@ def test_a_log_with_missing_columns_is_refused(s3_log, tmp_path):
     assert f"{broken}: flight log lacks column(s) rudder_cmd" in str(result.exception)
 
 
+def test_logs_with_rounded_jittered_timestamps_from_two_clocks_are_pooled(s3_log, tmp_path):
+    """Two logs of one configuration as real loggers write them: timestamps with 7 decimals, one of them from a
+    clock with jitter running 50 ppm fast. Both are cut and time-averaged together (one sample rate within 1e-4)."""
+    import numpy as np
+    import pandas as pd
+
+    log = pd.read_csv(s3_log)
+    rounded, other_clock = tmp_path / "rounded.csv", tmp_path / "other_clock.csv"
+    log.assign(time_s=log["time_s"].round(7)).to_csv(rounded, index=False)
+    jitter = np.random.default_rng(8).normal(0.0, 0.02 / 512.0, len(log))
+    log.assign(time_s=(log["time_s"] * (1 + 5e-5) + jitter).round(7)).to_csv(
+        other_clock, index=False
+    )
+    result = CliRunner().invoke(
+        campaign_command,
+        ["--log", f"S3@98={rounded}", "--log", f"S3@98={other_clock}", "--mass-kg", "0.0234"]
+        + ["--iyy-kg-m2", "1.35e-4", "--out", str(tmp_path / "out"), "--no-pictures", "--json"],
+    )
+    assert result.exit_code == 0, result.output
+    (row,) = json.loads(result.stdout)["configurations"]
+    assert row["manoeuvres"] == 2 * MANOEUVRES
+
+
 def test_campaign_file_run_through_the_console_script(s3_log, tmp_path):
     executable = _ornitail()
     reference = linearise(study_configuration("S3", 98.0))
@@ -141,7 +165,12 @@ def test_campaign_file_run_through_the_console_script(s3_log, tmp_path):
     )
     assert completed.returncode == 0, completed.stderr
     document = json.loads(completed.stdout)  # exactly one JSON object on stdout
-    assert "flight campaign" in completed.stderr  # the progress bar goes to stderr
+    # stderr is a pipe, not a terminal: progress comes as timestamped lines, the last once done
+    assert re.search(
+        r"^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ flight campaign: 100/100 steps, 1 configuration\(s\) analysed$",
+        completed.stderr,
+        re.MULTILINE,
+    ), completed.stderr
     (row,) = document["configurations"]
     assert row["configuration"] == "S3@98" and document["seed"] == 5
     # the file's input hold reached the model; the option's selection rule picked the model
