@@ -9,20 +9,24 @@ baseline file; and diagnoses the files blind. Case kinds repeat in the order of 
 Scores: top-1 = an effect is reported and the reported set holds a true effect; top-3 = every true
 effect is in the reported set, the second effect's set or the first three of the ranking; false alarm = a no-effect case
 not reported as ``none``; magnitude error |k - k_true| / |k_true| of the true effect's fitted
-magnitude (single-effect cases named correctly); closure achieved by the reported effect next to
-the closure the true effect's candidate achieved; confusion matrix of single-effect and no-effect
-cases (true kind by reported name, ``none`` or ``unexplained``).
+magnitude (single-effect cases named correctly); closure achieved by the reported effect (test
+runs, and validation runs) next to the validation closure the true effect's candidate achieved;
+for every named effect, its closure on a fresh flight of the same case (another noise and gust
+seed) against the reported closure and its interval; confusion matrix of single-effect and
+no-effect cases (true kind by reported name, ``none`` or ``unexplained``).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
-from ornitail.gap.flight_diagnosis import diagnose_flight
+from ornitail.gap.flight_data import read_flight_runs
+from ornitail.gap.flight_diagnosis import FlightDiagnosis, diagnose_flight, residuals_of
 from ornitail.gap.model_spec import read_baseline_spec, write_baseline_spec
 from ornitail.gap.withheld_effects import WithheldCase, simulate_withheld_log, true_magnitudes
 from ornitail.sim.free_flight import write_flight_log_csv
@@ -74,11 +78,26 @@ def draw_case(index: int, seed: int, manoeuvres: int) -> WithheldCase:
     )
 
 
+def fresh_flight_closure(case: WithheldCase, diagnosis: FlightDiagnosis, folder: Path) -> float:
+    """Closure of the diagnosis' chosen model on a fresh flight of the same case (another noise and
+    gust seed), with the diagnosis' own channel weights: what a user would see on new data."""
+    fresh = dataclasses.replace(case, seed=case.seed + 1)
+    path = write_flight_log_csv(simulate_withheld_log(fresh), folder / "fresh-flight.csv")
+    runs = read_flight_runs([path])
+
+    def energy(model) -> float:
+        return float(sum(np.sum((r / diagnosis.weights) ** 2) for r in residuals_of(model, runs)))
+
+    return 1.0 - float(np.sqrt(energy(diagnosis.chosen) / energy(diagnosis.baseline)))
+
+
 def run_case(case: WithheldCase, folder: Path, seed: int) -> dict[str, object]:
-    """Fly, write, diagnose blind, and score one case."""
+    """Fly, write, diagnose blind, and score one case (and, when an effect is named, its closure
+    on a fresh flight of the same case against the reported interval)."""
     log_path = write_flight_log_csv(simulate_withheld_log(case), folder / "flight.csv")
     spec_path = write_baseline_spec(case.baseline_spec(), folder / "baseline.toml")
-    report = diagnose_flight(read_baseline_spec(spec_path), [log_path], seed=seed).report
+    diagnosis = diagnose_flight(read_baseline_spec(spec_path), [log_path], seed=seed)
+    report = diagnosis.report
     truth = true_magnitudes(case)
     ranking = report["ranking"]
     names = [entry["name"] for entry in ranking]
@@ -101,14 +120,22 @@ def run_case(case: WithheldCase, folder: Path, seed: int) -> dict[str, object]:
         "second_effect": second.get("effect"),
         "top1": bool(truth) and bool(reported & set(truth)),
         "top3": bool(truth) and set(truth) <= first_three,
-        "closure_reported": report["closure"]["realised_withheld"],
+        "closure_reported": report["closure"]["realised_test"],
+        "closure_reported_validation": report["closure"]["realised_validation"],
+        "detection_threshold": report["detection_rule"]["threshold"],
         "gap_before": report["gap_before"]["total"],
         "gap_after": report["gap_after"]["total"],
     }
+    if report["verdict"] == "effect":
+        low, high = report["closure"]["interval"]
+        fresh = fresh_flight_closure(case, diagnosis, folder)
+        result["closure_interval"] = [low, high]
+        result["closure_fresh_flight"] = fresh
+        result["fresh_within_interval"] = bool(low <= fresh <= high)
     if len(truth) == 1:
         ((name, magnitude),) = truth.items()
         entry = by_name.get(name)
-        result["closure_true_effect"] = entry["withheld_closure"] if entry else None
+        result["closure_true_effect"] = entry["validation_closure"] if entry else None
         if entry and result["top1"] and magnitude != 0:
             result["magnitude_error"] = abs(entry["magnitude"] - magnitude) / abs(magnitude)
     return result
@@ -137,10 +164,11 @@ def summarise(results: list[dict[str, object]]) -> dict[str, object]:
         matrix[truth][_label(result)] += 1
     errors = [r["magnitude_error"] for r in results if "magnitude_error" in r]
     paired = [
-        (r["closure_reported"], r["closure_true_effect"])
+        (r["closure_reported"], r["closure_true_effect"], r["closure_reported_validation"])
         for r in results
         if r.get("closure_true_effect") is not None and r["verdict"] == "effect"
     ]
+    named = [r for r in results if "closure_fresh_flight" in r]
     return {
         "cases": len(results),
         "effect_cases": len(effect_cases),
@@ -160,7 +188,23 @@ def summarise(results: list[dict[str, object]]) -> dict[str, object]:
         "magnitude_error_median": float(np.median(errors)) if errors else None,
         "magnitude_error_90th_percentile": float(np.quantile(errors, 0.9)) if errors else None,
         "closure_reported_median": float(np.median([p[0] for p in paired])) if paired else None,
+        "closure_reported_validation_median": float(np.median([p[2] for p in paired]))
+        if paired
+        else None,
         "closure_true_effect_median": float(np.median([p[1] for p in paired])) if paired else None,
+        "fresh_flight_within_interval": float(np.mean([r["fresh_within_interval"] for r in named]))
+        if named
+        else None,
+        "fresh_flight_below_reported": float(
+            np.mean([r["closure_fresh_flight"] < r["closure_reported"] for r in named])
+        )
+        if named
+        else None,
+        "closure_reported_minus_fresh_median": float(
+            np.median([r["closure_reported"] - r["closure_fresh_flight"] for r in named])
+        )
+        if named
+        else None,
         "confusion_matrix": {"rows_true": truths, "columns_reported": columns, "counts": matrix},
     }
 

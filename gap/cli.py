@@ -212,8 +212,13 @@ def render_benchmark(result: dict) -> str:
         f"mean reported set size {scores['mean_reported_set_size']:.2f}",
         f"magnitude error: median {number(scores['magnitude_error_median'])}, 90th percentile "
         f"{number(scores['magnitude_error_90th_percentile'])} (relative)",
-        f"closure on withheld runs: reported effect {number(scores['closure_reported_median'])}, "
-        f"true effect {number(scores['closure_true_effect_median'])} (medians)",
+        f"closure of the reported effect: test runs {number(scores['closure_reported_median'])}, "
+        f"validation runs {number(scores['closure_reported_validation_median'])}; true effect on "
+        f"validation runs {number(scores['closure_true_effect_median'])} (medians)",
+        f"named effects on a fresh flight of the same case: closure within the reported interval "
+        f"{percent(scores['fresh_flight_within_interval'])}, below the reported closure "
+        f"{percent(scores['fresh_flight_below_reported'])}, reported minus fresh "
+        f"{number(scores['closure_reported_minus_fresh_median'])} (median)",
         "confusion matrix (rows: true effect; columns: reported):",
         " " * width + " ".join(f"{c[:8]:>8s}" for c in columns),
     ]

@@ -1,11 +1,15 @@
 """Diagnosis of free-flight logs against a linear baseline: where, which effect, how far it shrinks.
 
-1. The logs' manoeuvres (:mod:`ornitail.gap.flight_data`) are split 70/30 with the seed.
+1. The logs' manoeuvres (:mod:`ornitail.gap.flight_data`) are cut into seeded nested folds: in
+   each, training/validation/test runs (50/25/25 with 20 runs); every run is a test run once.
 2. Where: the baseline's residuals on all manoeuvres, decomposed by channel, frequency band, time
    segment and steady state (:mod:`ornitail.gap.flight_localisation`).
 3. Which: every candidate (:mod:`ornitail.gap.flight_candidates`) is fitted on the training
-   manoeuvres and scored on the withheld ones (:mod:`ornitail.gap.ranking`).
-4. How far: gap before and after the chosen effect per channel on the withheld manoeuvres.
+   manoeuvres and ranked on the validation ones (:mod:`ornitail.gap.ranking`); the detection rule
+   is calibrated on the same runs with random directions of the model (:func:`null_rule`).
+4. How far: gap before and after the chosen effect per channel on the test manoeuvres, each
+   scored with the effect its own fold chose (on validation runs) and fitted (on training runs)
+   without it. Ranking, detection and verdict are the first fold's.
 
 Fits, ranking and the gap before and after are weighted per channel by the inverse of the noise
 level: the standard deviation of the part of the baseline's training residual that does not repeat
@@ -24,36 +28,59 @@ from pathlib import Path
 import numpy as np
 
 from ornitail.flight.residual_statistics import residual_tests
+from ornitail.gap.detection import (
+    NULL_DRAWS,
+    DetectionRule,
+    closure_of,
+    random_matrix_directions,
+)
 from ornitail.gap.flight_candidates import (
     FlightCandidate,
     baseline_flight_model,
     flight_candidates,
 )
-from ornitail.gap.flight_data import CHANNELS, FlightRun, read_flight_runs, split_runs
+from ornitail.gap.flight_data import (
+    CHANNELS,
+    FlightRun,
+    RunSplit,
+    nested_split_counts,
+    nested_splits,
+    read_flight_runs,
+)
 from ornitail.gap.flight_localisation import (
     localise_flight,
     sparse_pointer,
     unlocked_residual_sd,
 )
 from ornitail.gap.flight_model import LinearFlightModel, simulate_runs, superpose
+from ornitail.gap.intervals import closure_with_interval
 from ornitail.gap.magnitude_fit import fit_magnitude
 from ornitail.gap.model_spec import BaselineSpec
 from ornitail.gap.ranking import CandidateEvidence, Ranking, rank_candidates
-from ornitail.gap.report import assemble_report
+from ornitail.gap.report import assemble_report, magnitude_field
 
 DEFAULT_SEED = 2018
+NULL_BOUNDS = (-1.0, 1.0)  # magnitude of a null direction: relative change of A and B entries
 
 
 @dataclass(frozen=True)
 class FlightDiagnosis:
-    """The report (JSON-ready dict) and what the plots need."""
+    """The report (JSON-ready dict) and what the plots need.
+
+    ``chosen`` is the top-ranked effect fitted on the first fold's training runs;
+    ``after_residuals`` each run's residual (N, 4; SI) as a test run, with the effect chosen and
+    fitted in its own fold. ``scales`` are the measured signals' standard deviations (SI, per
+    channel); ``weights`` the noise levels the fits, ranking and closures divide each channel by
+    (SI, per channel).
+    """
 
     report: dict[str, object]
     runs: list[FlightRun]
-    withheld: np.ndarray
     baseline: LinearFlightModel
     chosen: LinearFlightModel
+    after_residuals: list[np.ndarray]
     scales: np.ndarray
+    weights: np.ndarray
 
 
 def noise_scales(
@@ -119,7 +146,7 @@ def _fit(
 @dataclass(frozen=True)
 class _Split:
     training: list[FlightRun]
-    withheld: list[FlightRun]
+    validation: list[FlightRun]
     scales: np.ndarray
     reference_rms: np.ndarray
     seed: int
@@ -146,21 +173,51 @@ def _fit_pair(
     return magnitudes[1], model
 
 
+def null_rule(
+    start: LinearFlightModel,
+    training: Sequence[FlightRun],
+    validation: Sequence[FlightRun],
+    scales: np.ndarray,
+    seed: int,
+    draws: int = NULL_DRAWS,
+) -> DetectionRule:
+    """The detection rule calibrated around ``start`` (:mod:`ornitail.gap.detection`): ``draws``
+    random directions in A and B, each fitted on the ``training`` runs within
+    :data:`NULL_BOUNDS` and scored on the ``validation`` runs, channels divided by ``scales``
+    (SI per channel)."""
+    start_sse = float(_channel_sse(residuals_of(start, validation), scales).sum())
+    closures = []
+    for a_step, b_step in random_matrix_directions(start.a_matrix, start.b_matrix, draws, seed):
+
+        def family(k: float, a_step=a_step, b_step=b_step) -> LinearFlightModel:
+            return start.with_matrices(start.a_matrix + k * a_step, start.b_matrix + k * b_step)
+
+        _, model = _fit(family, NULL_BOUNDS, training, scales)
+        after = float(_channel_sse(residuals_of(model, validation), scales).sum())
+        closures.append(closure_of(start_sse, after))
+    return DetectionRule(
+        f"validation closures of {draws} random one-parameter directions in the A and B entries "
+        "(dynamic rows, scaled per entry), fitted on the training runs like every candidate",
+        np.array(closures),
+    )
+
+
 def _score_library(
     library: Sequence[FlightCandidate],
     start: LinearFlightModel,
     baseline: LinearFlightModel,
     split: _Split,
     first: tuple[FlightCandidate, float] | None = None,
-) -> tuple[Ranking, dict[str, tuple[LinearFlightModel, np.ndarray]], np.ndarray]:
-    """Fit every candidate on the training runs and rank them on the withheld runs against
+    calibrate: bool = True,
+) -> tuple[Ranking, dict[str, LinearFlightModel], DetectionRule | None]:
+    """Fit every candidate on the training runs and rank them on the validation runs against
     ``start``: alone (``first`` None, ``start`` = ``baseline``), or together with the ``first``
     (candidate, magnitude) whose model is ``start``, both magnitudes refitted.
 
-    Returns the ranking, each candidate's model and withheld per-channel squared residuals, and
-    ``start``'s withheld per-channel squared residuals.
+    Returns the ranking, each candidate's model, and the detection rule calibrated around
+    ``start`` (without ``calibrate``: None, and nothing is detected; the ranking only chooses).
     """
-    start_residuals = residuals_of(start, split.withheld)
+    start_residuals = residuals_of(start, split.validation)
     start_sse = _channel_sse(start_residuals, split.scales)
     evidence, fitted = [], {}
     for candidate in library:
@@ -168,46 +225,85 @@ def _score_library(
             magnitude, model = _fit(candidate.build, candidate.bounds, split.training, split.scales)
         else:
             magnitude, model = _fit_pair(*first, candidate, baseline, split)
-        residuals = residuals_of(model, split.withheld)
-        fitted[candidate.name] = (model, _channel_sse(residuals, split.scales))
+        residuals = residuals_of(model, split.validation)
+        fitted[candidate.name] = model
         evidence.append(
             CandidateEvidence(
                 name=candidate.name,
                 magnitude=magnitude,
                 unit=candidate.unit,
                 parameters=1,
-                heldout_sse=fitted[candidate.name][1].sum(axis=1),
+                heldout_sse=_channel_sse(residuals, split.scales).sum(axis=1),
                 training_sse=float(
                     _channel_sse(residuals_of(model, split.training), split.scales).sum()
                 ),
                 input_correlation=_input_correlation(
-                    residuals, split.withheld, split.reference_rms
+                    residuals, split.validation, split.reference_rms
                 ),
+                bounds=candidate.bounds,
             )
         )
+    rule = (
+        null_rule(start, split.training, split.validation, split.scales, split.seed)
+        if calibrate
+        else None
+    )
     ranking = rank_candidates(
         evidence,
         start_sse.sum(axis=1),
         float(_channel_sse(residuals_of(start, split.training), split.scales).sum()),
-        _input_correlation(start_residuals, split.withheld, split.reference_rms),
+        _input_correlation(start_residuals, split.validation, split.reference_rms),
         int(sum(len(run.time_s) for run in split.training) * len(CHANNELS)),
         split.seed,
+        rule,
     )
-    return ranking, fitted, start_sse
+    return ranking, fitted, rule
 
 
-def _second_effect(ranking: Ranking | None) -> dict[str, object] | None:
-    """A second effect found on top of the first (closure counted from the first)."""
-    if ranking is None or not ranking.detected:
+def _second_effect(
+    scored: tuple[Ranking, dict[str, LinearFlightModel], DetectionRule | None] | None,
+    first_model: LinearFlightModel,
+    test: Sequence[FlightRun],
+    scales: np.ndarray,
+    seed: int,
+) -> dict[str, object] | None:
+    """A second effect found on top of the first (closure counted from the first, on the test
+    runs; the validation closure that chose it next to it)."""
+    if scored is None or not scored[0].detected:
         return None
+    ranking, fitted, rule = scored
     top = ranking.entries[0]
+    realised, interval = closure_with_interval(
+        _channel_sse(residuals_of(first_model, test), scales).sum(axis=1),
+        _channel_sse(residuals_of(fitted[top.name], test), scales).sum(axis=1),
+        seed,
+    )
     return {
         "effect": top.name,
         "indistinguishable_set": list(ranking.top_set),
-        "magnitude": {"value": top.magnitude, "unit": top.unit},
-        "closure_beyond_first": top.heldout_closure,
-        "closure_interval": list(top.closure_interval),
+        "magnitude": magnitude_field(top.magnitude, top.unit, top.at_bound),
+        "closure_beyond_first": realised,
+        "closure_interval": interval,
+        "validation_closure_beyond_first": top.heldout_closure,
+        "detection_rule": rule.as_report(),
     }
+
+
+def _fold(
+    runs: Sequence[FlightRun], part: RunSplit, baseline: LinearFlightModel, seed: int
+) -> tuple[_Split, np.ndarray]:
+    """One fold's training and validation runs with its channel weights (the baseline's noise
+    levels on its training runs), and the measured signals' standard deviations there (SI)."""
+    training = [runs[i] for i in part.training]
+    validation = [runs[i] for i in part.validation]
+    signal_scales = np.concatenate([run.states for run in training]).std(axis=0)
+    signal_scales = np.where(signal_scales > 0, signal_scales, 1.0)
+    scales = noise_scales(training, residuals_of(baseline, training), signal_scales)
+    reference_rms = np.sqrt(
+        np.mean(np.concatenate(residuals_of(baseline, validation)) ** 2, axis=0)
+    )
+    reference_rms = np.where(reference_rms > 0, reference_rms, 1.0)
+    return _Split(training, validation, scales, reference_rms, seed), signal_scales
 
 
 def diagnose_flight(
@@ -215,51 +311,66 @@ def diagnose_flight(
 ) -> FlightDiagnosis:
     """Run the whole diagnosis of flight logs against ``spec``'s baseline."""
     runs = read_flight_runs(data_paths)
-    training_index, withheld_index = split_runs(len(runs), seed)
-    training = [runs[i] for i in training_index]
-    withheld = [runs[i] for i in withheld_index]
+    splits = nested_splits(len(runs), seed, ", ".join(str(path) for path in data_paths))
     baseline = baseline_flight_model(spec)
-    signal_scales = np.concatenate([run.states for run in training]).std(axis=0)
-    signal_scales = np.where(signal_scales > 0, signal_scales, 1.0)
-    scales = noise_scales(training, residuals_of(baseline, training), signal_scales)
-    counts = np.array([len(run.time_s) for run in withheld], dtype=float)
-
-    base_withheld_residuals = residuals_of(baseline, withheld)
-    reference_rms = np.sqrt(np.mean(np.concatenate(base_withheld_residuals) ** 2, axis=0))
-    reference_rms = np.where(reference_rms > 0, reference_rms, 1.0)
+    split, signal_scales = _fold(runs, splits[0], baseline, seed)
+    scales = split.scales
     library = flight_candidates(spec, baseline)
-    split = _Split(training, withheld, scales, reference_rms, seed)
-    ranking, fitted, base_withheld = _score_library(library, baseline, baseline, split)
+    ranking, fitted, rule = _score_library(library, baseline, baseline, split)
+    chosen_model = fitted[ranking.entries[0].name]
+    first_test = [runs[i] for i in splits[0].test]
     second = None
     if ranking.detected:
         top = ranking.entries[0]
         first = (next(c for c in library if c.name == top.name), top.magnitude)
         rest = [c for c in library if c.name not in ranking.top_set]
         if rest:
-            second, _, _ = _score_library(rest, fitted[top.name][0], baseline, split, first)
+            second = _score_library(rest, chosen_model, baseline, split, first)
+    # how far: every run is a test run once, scored with the effect chosen and fitted without it
+    after_residuals = dict(zip(splits[0].test, residuals_of(chosen_model, first_test), strict=True))
+    choices = {ranking.entries[0].name: 1}
+    for part in splits[1:]:
+        fold_ranking, fold_fitted, _ = _score_library(
+            library, baseline, baseline, _fold(runs, part, baseline, seed)[0], calibrate=False
+        )
+        name = fold_ranking.entries[0].name
+        choices[name] = choices.get(name, 0) + 1
+        test = [runs[i] for i in part.test]
+        after_residuals.update(zip(part.test, residuals_of(fold_fitted[name], test), strict=True))
     all_residuals = residuals_of(baseline, runs)
     where = localise_flight(runs, all_residuals, signal_scales, baseline)
-    pointer = sparse_pointer(training, residuals_of(baseline, training), baseline)
-    chosen_model, chosen_sse = fitted[ranking.entries[0].name]
+    pointer = sparse_pointer(split.training, residuals_of(baseline, split.training), baseline)
+    order = np.concatenate([part.test for part in splits])
+    counts = np.array([len(runs[i].time_s) for i in order], dtype=float)
+    before_sse = _channel_sse([all_residuals[i] for i in order], scales)
     report = assemble_report(
         kind="flight",
         spec=spec,
         data_paths=data_paths,
-        run_counts={"total": len(runs), "training": len(training), "withheld": len(withheld)},
+        total_runs=len(runs),
+        split=nested_split_counts(splits, len(runs)) | {"test_choices": choices},
         ranking=ranking,
+        rule=rule,
         channels=CHANNELS,
         sample_counts=counts,
-        before_sse=base_withheld,
-        after_sse=chosen_sse,
+        before_sse=before_sse,
+        after_sse=_channel_sse([after_residuals[i] for i in order], scales),
         where=where,
         pointer=pointer,
         seed=seed,
         verdict_gap=float(
             np.sqrt(
-                np.sum(base_withheld * (scales / signal_scales) ** 2)
-                / (counts.sum() * len(CHANNELS))
+                np.sum(before_sse * (scales / signal_scales) ** 2) / (counts.sum() * len(CHANNELS))
             )
         ),
     )
-    report["second_effect"] = _second_effect(second)
-    return FlightDiagnosis(report, runs, withheld_index, baseline, chosen_model, signal_scales)
+    report["second_effect"] = _second_effect(second, chosen_model, first_test, scales, seed)
+    return FlightDiagnosis(
+        report,
+        runs,
+        baseline,
+        chosen_model,
+        [after_residuals[i] for i in range(len(runs))],
+        signal_scales,
+        scales,
+    )

@@ -5,9 +5,13 @@ carry one residual per channel. A simulator effect is ``baseline + k x step`` (`
 prediction with the effect on minus with it off), k by least squares on the normalised residual;
 the offset candidate is a constant per channel (weighted mean of the training residual).
 
-A split is a list of folds ``(training, withheld)``: one fold for a 70/30 split, one per row for
-leave-one-out. Every row is withheld at most once; the withheld rows of all folds are scored
-together. The magnitude reported is the fit on the union of the training rows.
+A split is a list of folds ``(training, withheld)``: one fold ``(training, validation)`` for a
+three-way split (the test rows are then in neither, and their residual after a candidate is the
+training fit's prediction; :func:`nested_test` rotates the test rows), one per row for
+leave-one-out. Every row is withheld at most once; the
+withheld rows of all folds are scored together. The magnitude reported is the fit on the union of
+the training rows. The detection rule's null directions (:func:`linear_null_rule`) are random
+combinations of the configuration variables, fitted and scored the same way.
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ornitail.gap.detection import NULL_DRAWS, DetectionRule, closure_of, random_feature_steps
 from ornitail.gap.ranking import CandidateEvidence, Ranking, rank_candidates
 
 Fold = tuple[np.ndarray, np.ndarray]
@@ -115,8 +120,10 @@ def rank_linear_candidates(
     scales: np.ndarray,
     folds: list[Fold],
     seed: int,
+    rule: DetectionRule | None = None,
 ) -> LinearRanking:
-    """Rank ``fits`` on the withheld rows (:func:`ornitail.gap.ranking.rank_candidates`)."""
+    """Rank ``fits`` on the withheld rows (:func:`ornitail.gap.ranking.rank_candidates`); detect
+    with ``rule`` (None: rank only)."""
     scales = np.broadcast_to(scales, residual.shape)
     withheld = np.concatenate([rows for _, rows in folds])
     base_training = float(np.mean([_sse(residual, scales, rows) for rows, _ in folds]))
@@ -135,6 +142,70 @@ def rank_linear_candidates(
     ]
     training_count = len(folds[0][0]) * residual.shape[1]
     ranking = rank_candidates(
-        evidence, base_rows[withheld], base_training, 0.0, training_count, seed
+        evidence, base_rows[withheld], base_training, 0.0, training_count, seed, rule
     )
     return LinearRanking(ranking, fits, withheld)
+
+
+def linear_null_rule(
+    residual: np.ndarray,
+    features: np.ndarray,
+    scales: np.ndarray,
+    folds: list[Fold],
+    seed: int,
+    draws: int = NULL_DRAWS,
+) -> DetectionRule:
+    """The detection rule (:mod:`ornitail.gap.detection`) for row tables: ``draws`` random steps
+    built from ``features`` (rows, variables), fitted per fold like the candidates and scored on
+    the withheld rows."""
+    scales = np.broadcast_to(scales, residual.shape)
+    steps = random_feature_steps(features, scales, draws, seed)
+    fits = fit_linear_candidates(
+        residual, {f"null_{i}": step for i, step in enumerate(steps)}, scales, folds, None
+    )
+    withheld = np.concatenate([rows for _, rows in folds])
+    before = _sse(residual, scales, withheld)
+    closures = [closure_of(before, _sse(fit.after, scales, withheld)) for fit in fits.values()]
+    return DetectionRule(
+        f"withheld closures of {len(closures)} random one-parameter steps (random combinations "
+        "of the standardised configuration variables and a constant per channel), fitted on the "
+        "training rows like every candidate",
+        np.array(closures),
+    )
+
+
+def nested_test(
+    residual: np.ndarray,
+    steps: dict[str, np.ndarray],
+    scales: np.ndarray,
+    offset: tuple[str, str] | None,
+    candidates: tuple[str, ...],
+    seed: int,
+    outer: list[tuple[list[Fold], np.ndarray]],
+) -> tuple[np.ndarray, dict[str, int]]:
+    """Test residuals by nested cross-validation: for each ``(inner folds, test rows)`` of
+    ``outer``, the inner folds (which hold no test row) rank the candidates, and the top one,
+    fitted on the inner training rows, predicts the test rows. Returns the residual after the chosen
+    candidate on every test row (rows, channels, SI; NaN on rows never tested) and how often each
+    candidate was chosen. ``candidates`` (when not empty) restricts the library."""
+    after = np.full(residual.shape, np.nan)
+    chosen: dict[str, int] = {}
+    for inner, test in outer:
+        fits = fit_linear_candidates(residual, steps, scales, inner, offset)
+        if candidates:
+            fits = {name: fit for name, fit in fits.items() if name in candidates}
+        best = rank_linear_candidates(residual, fits, scales, inner, seed).best
+        after[test] = best.after[test]
+        chosen[best.name] = chosen.get(best.name, 0) + 1
+    return after, chosen
+
+
+def leave_one_out_outer(count: int) -> list[tuple[list[Fold], np.ndarray]]:
+    """Nested leave-one-out: each row in turn is the test row; leave-one-out over the others
+    chooses."""
+    everything = np.arange(count)
+    outer = []
+    for row in everything:
+        rest = np.delete(everything, row)
+        outer.append(([(np.delete(rest, i), rest[[i]]) for i in range(len(rest))], np.array([row])))
+    return outer

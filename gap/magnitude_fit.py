@@ -1,7 +1,9 @@
 """Fitting one candidate's magnitude: a coarse grid over its bounds, then Brent's method.
 
 The cost is any function of the magnitude (the training runs' normalised squared residual); the
-grid guards against the local minima a delay or a blended effect can have.
+grid guards against the local minima a delay or a blended effect can have. A fit within
+:data:`BOUND_TOLERANCE` of the range from either end sits *at the bound*: the data want at least
+(upper) or at most (lower) that value, and the report says so instead of giving a plain value.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 GRID_POINTS = 13
+BOUND_TOLERANCE = 0.005  # fraction of the candidate's range
 
 
 def fit_magnitude(
@@ -36,3 +39,18 @@ def fit_magnitude(
     if result.fun < values[best]:
         return float(result.x), float(result.fun)
     return float(grid[best]), float(values[best])
+
+
+def bound_side(magnitude: float, bounds: tuple[float, float] | None) -> str | None:
+    """``"lower"`` or ``"upper"`` when ``magnitude`` is within :data:`BOUND_TOLERANCE` of the
+    range from that end of ``bounds`` (same unit as the magnitude), else None (also without
+    bounds)."""
+    if bounds is None:
+        return None
+    low, high = bounds
+    tolerance = BOUND_TOLERANCE * (high - low)
+    if magnitude <= low + tolerance:
+        return "lower"
+    if magnitude >= high - tolerance:
+        return "upper"
+    return None

@@ -36,7 +36,7 @@ def residual_spectra_picture(
     effect: str,
     folder: Path,
 ) -> list[str]:
-    """Residual power per channel on the withheld runs, baseline and with ``effect``."""
+    """Residual power per channel on the test runs, baseline and with ``effect``."""
     length = fft_length(before)
     frequencies, power_before = residual_power(before, time_step_s, length)
     _, power_after = residual_power(after, time_step_s, length)
@@ -86,11 +86,12 @@ def localisation_picture(where: dict[str, Any], folder: Path) -> list[str]:
 
 
 def ranking_picture(report: dict[str, Any], folder: Path) -> list[str]:
-    """Withheld closure of each candidate with its 90 % interval; the top set highlighted."""
+    """Validation closure of each candidate with its 90 % interval; the top set highlighted; the
+    detection threshold as a dashed line."""
     ranking = report["ranking"]
     figure, axis = plt.subplots(figsize=(7, 0.45 * len(ranking) + 1.2))
     positions = np.arange(len(ranking))[::-1]
-    values = [entry["withheld_closure"] for entry in ranking]
+    values = [entry["validation_closure"] for entry in ranking]
     errors = np.array(
         [
             [v - e["closure_interval"][0], e["closure_interval"][1] - v]
@@ -101,7 +102,15 @@ def ranking_picture(report: dict[str, Any], folder: Path) -> list[str]:
     axis.barh(positions, values, xerr=errors, color=colours)
     axis.set_yticks(positions, [entry["name"] for entry in ranking])
     axis.axvline(0.0, color="black", linewidth=0.8)
-    axis.set_xlabel("closure of the gap on withheld runs (1 - gap after / gap before)")
+    axis.axvline(
+        report["detection_rule"]["threshold"],
+        color="tab:blue",
+        linestyle="--",
+        linewidth=0.8,
+        label="detection threshold",
+    )
+    axis.legend(fontsize=7)
+    axis.set_xlabel("closure of the gap on validation runs (1 - gap after / gap before)")
     figure.tight_layout()
     return _save(figure, folder, "ranking")
 

@@ -6,14 +6,14 @@ Order: held-out closure first; candidates the withheld data cannot separate from
 the top *set* and are ordered among themselves by the drop of the residual-input correlation,
 then by AIC on the training data (which assumes white residuals, so it only breaks ties).
 
+The held-out runs here are the *validation* runs: they choose, and the gap's shrinking is reported
+on separate test runs (:mod:`ornitail.gap.report`).
+
 Tied with the best: the best candidate's closure exceeds the other's in fewer than
-:data:`SEPARATION_PROBABILITY` of the bootstrap resamples of the withheld runs, or the two closures
-differ by less than :data:`IDENTICAL_CLOSURE` (the same model family, e.g. added mass and I_yy).
-An effect is *detected* when the best held-out closure is at least :data:`MIN_CLOSURE` and its
-bootstrap 5 % quantile at least :data:`MIN_CLOSURE_LOWER_BOUND`. These floors sit above what a
-linearised simulator baseline leaves on its own nonlinear data (a fitted pitch-damping change
-closes 0-5 % of that gap at 30 % doublets, up to about 20 % at the study's 65 %; docs/gap-diagnosis.md),
-so that no-effect data are not blamed on an effect.
+:data:`SEPARATION_PROBABILITY` of the bootstrap resamples of the validation runs, or the two
+closures differ by less than :data:`IDENTICAL_CLOSURE` (the same model family, e.g. added mass and
+I_yy). An effect is *detected* when the calibrated rule (:mod:`ornitail.gap.detection`) accepts the
+best validation closure and its bootstrap 5 % quantile.
 """
 
 from __future__ import annotations
@@ -22,20 +22,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ornitail.gap.detection import DetectionRule
+from ornitail.gap.magnitude_fit import bound_side
+
 BOOTSTRAP_RESAMPLES = 1000
 SEPARATION_PROBABILITY = 0.95
 IDENTICAL_CLOSURE = 0.005
-MIN_CLOSURE = 0.15
-MIN_CLOSURE_LOWER_BOUND = 0.10
 
 
 @dataclass(frozen=True)
 class CandidateEvidence:
     """One fitted candidate: magnitude, parameter count, and its residual energies.
 
-    ``heldout_sse`` is per withheld run; ``training_sse`` the training total;
+    ``heldout_sse`` is per validation run; ``training_sse`` the training total;
     ``input_correlation`` the mean over channels of the largest |residual-input correlation| on
-    the withheld data.
+    the validation data; ``bounds`` the range the magnitude was fitted in (None: unbounded).
     """
 
     name: str
@@ -45,13 +46,18 @@ class CandidateEvidence:
     heldout_sse: np.ndarray
     training_sse: float
     input_correlation: float
+    bounds: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
 class RankedEffect:
+    """One candidate's scores; ``at_bound`` is ``"lower"``, ``"upper"`` or None
+    (:func:`ornitail.gap.magnitude_fit.bound_side`)."""
+
     name: str
     magnitude: float
     unit: str
+    at_bound: str | None
     heldout_closure: float
     closure_interval: tuple[float, float]
     training_closure: float
@@ -88,8 +94,13 @@ def rank_candidates(
     baseline_input_correlation: float,
     training_count: int,
     seed: int = 0,
+    rule: DetectionRule | None = None,
 ) -> Ranking:
-    """Rank ``evidence`` (see the module docstring); ``training_count`` = training samples."""
+    """Rank ``evidence`` (see the module docstring); ``training_count`` = training samples.
+
+    ``rule`` decides detection; without one (ranking only to choose, e.g. inside a nested
+    cross-validation) nothing is detected.
+    """
     runs = len(baseline_heldout_sse)
     generator = np.random.default_rng(seed)
     weights = generator.multinomial(runs, np.full(runs, 1.0 / runs), size=BOOTSTRAP_RESAMPLES)
@@ -116,6 +127,7 @@ def rank_candidates(
                 name=item.name,
                 magnitude=item.magnitude,
                 unit=item.unit,
+                at_bound=bound_side(item.magnitude, item.bounds),
                 heldout_closure=float(observed[index]),
                 closure_interval=(float(low), float(high)),
                 training_closure=float(training_closure),
@@ -129,8 +141,7 @@ def rank_candidates(
     top_set = tuple(entry.name for entry in entries if entry.in_top_set)
     top_indices = [index for index in range(len(evidence)) if tied[index]]
     confidence = float(np.mean(np.isin(winners, top_indices)))
-    detected = bool(
-        observed[best] >= MIN_CLOSURE
-        and np.quantile(resampled[:, best], 0.05) >= MIN_CLOSURE_LOWER_BOUND
+    detected = rule is not None and rule.detects(
+        float(observed[best]), float(np.quantile(resampled[:, best], 0.05))
     )
     return Ranking(entries, top_set, confidence, detected)

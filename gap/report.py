@@ -7,10 +7,17 @@ from pathlib import Path
 
 import numpy as np
 
-from ornitail.gap.intervals import gap_with_interval
+from ornitail.gap.detection import DetectionRule
+from ornitail.gap.intervals import closure_with_interval, gap_with_interval
 from ornitail.gap.model_spec import BaselineSpec
 from ornitail.gap.ranking import Ranking
 from ornitail.gap.verdict import verdict_of
+
+
+def magnitude_field(value: float, unit: str, at_bound: str | None) -> dict[str, object]:
+    """The report's ``magnitude`` object: ``value``, ``unit`` and ``at_bound`` (``"lower"``: the
+    data want at most ``value``; ``"upper"``: at least ``value``; None: inside the range)."""
+    return {"value": value, "unit": unit, "at_bound": at_bound}
 
 
 def assemble_report(
@@ -18,8 +25,10 @@ def assemble_report(
     kind: str,
     spec: BaselineSpec,
     data_paths: Sequence[str | Path],
-    run_counts: dict[str, int],
+    total_runs: int,
+    split: dict[str, object],
     ranking: Ranking,
+    rule: DetectionRule,
     channels: Sequence[str],
     sample_counts: np.ndarray,
     before_sse: np.ndarray,
@@ -31,15 +40,17 @@ def assemble_report(
 ) -> dict[str, object]:
     """The report's JSON fields (docs/gap-diagnosis.md) from the pieces of a diagnosis.
 
-    ``before_sse`` and ``after_sse`` are the withheld runs' normalised squared residuals per
-    channel (runs, channels) of the baseline and of the top-ranked effect; ``sample_counts`` the
-    samples per withheld run. ``verdict_gap`` is the withheld baseline gap in units of the measured
-    signals' standard deviation that the ``unexplained`` rule reads (default: ``gap_before``, when
-    the channels were normalised that way).
+    ``split`` holds the ``training``, ``validation`` and ``test`` run counts and the ``method``.
+    ``before_sse`` and ``after_sse`` are the *test* runs' normalised squared residuals per channel
+    (runs, channels) of the baseline and of the top-ranked effect (fitted without them, chosen
+    without them); ``sample_counts`` the samples per test run. ``verdict_gap`` is the baseline gap
+    in units of the measured signals' standard deviation that the ``unexplained`` rule reads
+    (default: ``gap_before``, when the channels were normalised that way).
     """
     top = ranking.entries[0]
     gap_before = gap_with_interval(before_sse, sample_counts, channels, seed)
     gap_after = gap_with_interval(after_sse, sample_counts, channels, seed)
+    realised, interval = closure_with_interval(before_sse.sum(axis=1), after_sse.sum(axis=1), seed)
     verdict = verdict_of(
         ranking,
         gap_before["total"] if verdict_gap is None else verdict_gap,
@@ -59,26 +70,35 @@ def assemble_report(
         },
         "data": [str(path) for path in data_paths],
         "seed": seed,
-        "runs": run_counts,
+        "runs": {
+            "total": total_runs,
+            "training": split["training"],
+            "validation": split["validation"],
+            "test": split["test"],
+        },
+        "split": split,
+        "detection_rule": rule.as_report(),
         "verdict": verdict,
         "effect": top.name if verdict == "effect" else None,
         "indistinguishable_set": list(ranking.top_set) if verdict == "effect" else [],
         "confidence": ranking.top_set_confidence if verdict == "effect" else None,
-        "magnitude": {"value": top.magnitude, "unit": top.unit},
+        "magnitude": magnitude_field(top.magnitude, top.unit, top.at_bound),
         "best_candidate": top.name,
         "gap_before": gap_before,
         "gap_after": gap_after,
         "closure": {
             "predicted_from_training": top.training_closure,
-            "realised_withheld": top.heldout_closure,
-            "interval": list(top.closure_interval),
+            "realised_validation": top.heldout_closure,
+            "realised_test": realised,
+            "interval": interval,
         },
         "ranking": [
             {
                 "name": entry.name,
                 "magnitude": entry.magnitude,
                 "unit": entry.unit,
-                "withheld_closure": entry.heldout_closure,
+                "at_bound": entry.at_bound,
+                "validation_closure": entry.heldout_closure,
                 "closure_interval": list(entry.closure_interval),
                 "training_closure": entry.training_closure,
                 "probability_best": entry.probability_best,

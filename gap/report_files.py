@@ -20,12 +20,11 @@ from ornitail.gap.tunnel_diagnosis import diagnose_tunnel
 
 
 def _flight_pictures(diagnosis: FlightDiagnosis, folder: Path) -> list[str]:
-    withheld = [diagnosis.runs[i] for i in diagnosis.withheld]
     effect = diagnosis.report["best_candidate"]
     written = residual_spectra_picture(
-        [r / diagnosis.scales for r in residuals_of(diagnosis.baseline, withheld)],
-        [r / diagnosis.scales for r in residuals_of(diagnosis.chosen, withheld)],
-        withheld[0].time_step_s,
+        [r / diagnosis.scales for r in residuals_of(diagnosis.baseline, diagnosis.runs)],
+        [r / diagnosis.scales for r in diagnosis.after_residuals],
+        diagnosis.runs[0].time_step_s,
         CHANNELS,
         effect,
         folder,

@@ -14,19 +14,32 @@ def _gap_line(label: str, gap: dict[str, Any]) -> str:
     return f"{label}: {gap['total']:.3f} [{low:.3f}, {high:.3f}]   per channel: {channels}"
 
 
+def magnitude_text(magnitude: dict[str, Any]) -> str:
+    """A magnitude as text: "at least X" / "at most X" (at the edge of the range) when the fit sits
+    on the candidate's upper / lower bound, else the plain value, with its unit."""
+    prefix = {"upper": "at least ", "lower": "at most "}.get(magnitude["at_bound"], "")
+    edge = " (at the edge of the range)" if magnitude["at_bound"] else ""
+    return f"{prefix}{magnitude['value']:.4g} {magnitude['unit']}{edge}"
+
+
 def render_report(report: dict[str, Any]) -> str:
     """Readable summary: verdict, where, ranking, how far the gap shrinks, the sparse pointer."""
     runs = report["runs"]
+    rule = report["detection_rule"]
     lines = [
         f"gap diagnosis of {report['data_kind']} data ({runs['total']} runs: "
-        f"{runs['training']} to fit, {runs['withheld']} withheld to score; seed {report['seed']})",
+        f"{runs['training']} to fit and {runs['validation']} to choose in the first fold, "
+        f"{runs['test']} scored as test runs; seed {report['seed']})",
+        f"split: {report['split']['method']}",
+        f"detection rule: validation closure above {rule['threshold']:.3f}, the larger of the 95th "
+        f"percentile of {rule['draws']} random one-parameter directions fitted the same way "
+        f"({rule['null_closures_quantile_95']:.3f}) and the materiality floor "
+        f"{rule['materiality_floor']:.2f}; 5 % bootstrap quantile above their median "
+        f"{rule['null_closures_median']:.3f}",
     ]
-    if report.get("split"):
-        lines.append(f"split: {report['split']}")
     if report["verdict"] == "effect":
-        magnitude = report["magnitude"]
         lines.append(
-            f"effect: {report['effect']} (magnitude {magnitude['value']:.4g} {magnitude['unit']}), "
+            f"effect: {report['effect']} (magnitude {magnitude_text(report['magnitude'])}), "
             f"indistinguishable set {{{', '.join(report['indistinguishable_set'])}}}, "
             f"confidence {report['confidence']:.2f}"
         )
@@ -34,9 +47,9 @@ def render_report(report: dict[str, Any]) -> str:
         if second:
             lines.append(
                 f"second effect on top of it: {second['effect']} (magnitude "
-                f"{second['magnitude']['value']:.4g} {second['magnitude']['unit']}, set "
+                f"{magnitude_text(second['magnitude'])}, set "
                 f"{{{', '.join(second['indistinguishable_set'])}}}, closes a further "
-                f"{second['closure_beyond_first']:.3f} of the remaining gap)"
+                f"{second['closure_beyond_first']:.3f} of the remaining gap on the test runs)"
             )
     elif report["verdict"] == "unexplained":
         lines.append(
@@ -46,24 +59,28 @@ def render_report(report: dict[str, Any]) -> str:
         lines.append("effect: none (no candidate closes a significant part of the gap)")
     lines.append("where:")
     lines += [f"  {sentence}" for sentence in report["where"]["summary"]]
-    lines.append("ranking (closure on withheld runs, 90 % interval; closure on training runs):")
+    lines.append("ranking (closure on validation runs, 90 % interval; closure on training runs):")
     for entry in report["ranking"]:
         low, high = entry["closure_interval"]
         mark = "*" if entry["in_top_set"] else " "
         lines.append(
-            f" {mark}{entry['name']:28s} {entry['withheld_closure']:+.3f} [{low:+.3f}, {high:+.3f}]"
-            f"  training {entry['training_closure']:+.3f}  k = {entry['magnitude']:.4g} "
-            f"{entry['unit']}  P(best) {entry['probability_best']:.2f}"
+            f" {mark}{entry['name']:28s} {entry['validation_closure']:+.3f} "
+            f"[{low:+.3f}, {high:+.3f}]  training {entry['training_closure']:+.3f}  k = "
+            f"{magnitude_text({'value': entry['magnitude'], 'unit': entry['unit'], 'at_bound': entry['at_bound']})}"
+            f"  P(best) {entry['probability_best']:.2f}"
         )
     closure = report["closure"]
+    low, high = closure["interval"]
     lines.append(
-        f"how far ({report['best_candidate']}, withheld runs, normalised RMS with 90 % intervals):"
+        f"how far ({report['best_candidate']}, test runs, normalised RMS with 90 % intervals):"
     )
     lines.append("  " + _gap_line("before", report["gap_before"]))
     lines.append("  " + _gap_line("after ", report["gap_after"]))
     lines.append(
-        f"  closure predicted from training {closure['predicted_from_training']:.3f}, "
-        f"realised on withheld runs {closure['realised_withheld']:.3f}"
+        f"  closure predicted from training {closure['predicted_from_training']:.3f}, on the "
+        f"validation runs that chose it {closure['realised_validation']:.3f}, realised on test "
+        f"runs {closure['realised_test']:.3f} [{low:.3f}, {high:.3f}] (interval over test runs, "
+        "conditional on the chosen effect)"
     )
     pointer = report["sparse_regression"]
     lines.append("sparse regression of the residual (pointer):")

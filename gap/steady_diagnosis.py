@@ -10,9 +10,12 @@ The baseline predicts each configuration's free-flight trim (theta_ss, V_ss, f_s
 
 Residuals are normalised per value by its standard error (the table's ``*_sigma`` or
 :data:`ornitail.gap.steady_data.DEFAULT_SIGMA`), so a gap of 1 is at the noise. With fewer than
-:data:`LEAVE_ONE_OUT_BELOW` configurations every configuration is withheld once and the
-candidates are fitted on the others (leave-one-out); otherwise the seeded 70/30 split applies.
-Fitting and ranking: :mod:`ornitail.gap.linear_candidates`.
+:data:`LEAVE_ONE_OUT_BELOW` configurations the ranking, detection rule and verdict come from
+leave-one-out (every configuration withheld once, the candidates fitted on the others) and the
+gap's shrinking from nested leave-one-out (each configuration in turn is the test row, the choice
+and the fit are made on the others by leave-one-out); otherwise the seeded nested
+training/validation/test folds of :func:`ornitail.gap.flight_data.nested_splits` apply. Fitting
+and ranking: :mod:`ornitail.gap.linear_candidates`.
 """
 
 from __future__ import annotations
@@ -31,8 +34,15 @@ from ornitail.gap.configuration_regression import (
     geometry_variables,
     localisation_sentences,
 )
-from ornitail.gap.flight_data import split_runs
-from ornitail.gap.linear_candidates import Fold, fit_linear_candidates, rank_linear_candidates
+from ornitail.gap.flight_data import nested_split_counts, nested_splits
+from ornitail.gap.linear_candidates import (
+    Fold,
+    fit_linear_candidates,
+    leave_one_out_outer,
+    linear_null_rule,
+    nested_test,
+    rank_linear_candidates,
+)
 from ornitail.gap.model_spec import BaselineSpec
 from ornitail.gap.plots import steady_residual_picture
 from ornitail.gap.report import assemble_report
@@ -84,16 +94,33 @@ def predict_trims(rows: pd.DataFrame, effects: EffectSet) -> np.ndarray:
     return predictions
 
 
-def folds_for(count: int, seed: int) -> tuple[list[Fold], str]:
-    """Leave-one-out below :data:`LEAVE_ONE_OUT_BELOW` configurations, else the 70/30 split."""
+def _split(
+    count: int, seed: int, where: str
+) -> tuple[list[Fold], list[tuple[list[Fold], np.ndarray]], dict[str, object]]:
+    """The folds that rank and detect, the nested outer folds that test, and the report's ``split``:
+    leave-one-out below :data:`LEAVE_ONE_OUT_BELOW` configurations, else the seeded nested
+    training/validation/test folds (:func:`ornitail.gap.flight_data.nested_splits`)."""
     if count < LEAVE_ONE_OUT_BELOW:
         everything = np.arange(count)
-        folds = [(np.delete(everything, i), np.array([i])) for i in range(count)]
-        return folds, (
-            f"leave-one-out: {count} configurations (< {LEAVE_ONE_OUT_BELOW}), each withheld "
-            "once and scored with the candidates fitted on the others"
+        return (
+            [(np.delete(everything, i), np.array([i])) for i in range(count)],
+            leave_one_out_outer(count),
+            {
+                "training": count - 2,
+                "validation": count - 1,
+                "test": count,
+                "method": f"nested leave-one-out: {count} configurations (< "
+                f"{LEAVE_ONE_OUT_BELOW}); each is the test row once, the effect scored on it "
+                "chosen and fitted on the others by leave-one-out (training = rows per fit, "
+                "validation = rows that chose); ranking and verdict: leave-one-out over all",
+            },
         )
-    return [split_runs(count, seed)], f"70/30 split of {count} configurations (seed {seed})"
+    splits = nested_splits(count, seed, where)
+    return (
+        [(splits[0].training, splits[0].validation)],
+        [([(part.training, part.validation)], part.test) for part in splits],
+        nested_split_counts(splits, count),
+    )
 
 
 def _where(
@@ -136,12 +163,17 @@ def _where(
     }
 
 
+def _features(rows: pd.DataFrame) -> tuple[np.ndarray, list[str]]:
+    """The geometry variables that vary over the rows, with their names."""
+    variables = geometry_variables(list(rows["tail"]), rows["x_h_m"].to_numpy())
+    names = [name for name in variables.columns if np.ptp(variables[name].to_numpy()) > 0]
+    return variables[names].to_numpy(float), names
+
+
 def _pointer(
     rows: pd.DataFrame, channels: tuple[str, ...], residual: np.ndarray
 ) -> dict[str, object]:
-    variables = geometry_variables(list(rows["tail"]), rows["x_h_m"].to_numpy())
-    names = [name for name in variables.columns if np.ptp(variables[name].to_numpy()) > 0]
-    features = variables[names].to_numpy(float)
+    features, names = _features(rows)
     return {
         f"{channel}_residual": sparse_terms(features, residual[:, i], names)
         for i, channel in enumerate(channels)
@@ -167,31 +199,32 @@ def diagnose_steady(spec: BaselineSpec, path: Path, seed: int) -> SteadyDiagnosi
         for name in spec.effects_off
         if EFFECT_SCOPES[name] != "tunnel"
     }
-    folds, split = folds_for(len(rows), seed)
+    folds, outer, split = _split(len(rows), seed, str(path))
     fits = fit_linear_candidates(residual, steps, scales, folds, OFFSET)
     if spec.candidates:
         fits = {name: fit for name, fit in fits.items() if name in spec.candidates}
-    scored = rank_linear_candidates(residual, fits, scales, folds, seed)
+    rule = linear_null_rule(residual, _features(rows)[0], scales, folds, seed)
+    scored = rank_linear_candidates(residual, fits, scales, folds, seed, rule)
     after = scored.best.after
-    withheld = scored.withheld
+    test_after, split["test_choices"] = nested_test(
+        residual, steps, scales, OFFSET, spec.candidates, seed, outer
+    )
+    test = np.concatenate([rows for _, rows in outer])
     where = _where(rows, channels, residual, scales)
     report = assemble_report(
         kind="steady",
         spec=spec,
         data_paths=[path],
-        run_counts={
-            "total": len(rows),
-            "training": len(folds[0][0]),
-            "withheld": len(withheld),
-        },
+        total_runs=len(rows),
+        split=split,
         ranking=scored.ranking,
+        rule=rule,
         channels=channels,
-        sample_counts=np.ones(len(withheld)),
-        before_sse=(residual[withheld] / scales[withheld]) ** 2,
-        after_sse=(after[withheld] / scales[withheld]) ** 2,
+        sample_counts=np.ones(len(test)),
+        before_sse=(residual[test] / scales[test]) ** 2,
+        after_sse=(test_after[test] / scales[test]) ** 2,
         where=where,
         pointer=_pointer(rows, channels, residual),
         seed=seed,
     )
-    report["split"] = split
     return SteadyDiagnosis(report, rows, channels, residual, after)

@@ -8,8 +8,11 @@ switched off (:func:`ornitail.sim.tunnel.true_cycle_average`). Candidates:
 - ``load_offset``: a constant offset per load (balance thermal drift, a tare error), 3 parameters.
 
 Residuals are normalised per load by the measured loads' standard deviation on the training points.
-Set points are split 70/30 with the seed; closures, intervals and the ranking are computed on the
-withheld points exactly as for flight data (:mod:`ornitail.gap.ranking`).
+Set points are cut into seeded nested folds (:func:`ornitail.gap.flight_data.nested_splits`): in
+the first, candidates are fitted on the training points, ranked and detected on the validation
+points (:mod:`ornitail.gap.ranking`, :mod:`ornitail.gap.detection`); the gap before and after is
+reported on every point as a test point, each predicted by the candidate its own fold chose and
+fitted without it (:func:`ornitail.gap.linear_candidates.nested_test`).
 """
 
 from __future__ import annotations
@@ -28,8 +31,13 @@ from ornitail.gap.configuration_regression import (
     geometry_variables,
     localisation_sentences,
 )
-from ornitail.gap.flight_data import split_runs
-from ornitail.gap.linear_candidates import fit_linear_candidates, rank_linear_candidates
+from ornitail.gap.flight_data import nested_split_counts, nested_splits
+from ornitail.gap.linear_candidates import (
+    fit_linear_candidates,
+    linear_null_rule,
+    nested_test,
+    rank_linear_candidates,
+)
 from ornitail.gap.model_spec import BaselineSpec
 from ornitail.gap.plots import tunnel_residual_picture
 from ornitail.gap.report import assemble_report
@@ -112,16 +120,21 @@ def _where(points: pd.DataFrame, residual: np.ndarray, scales: np.ndarray) -> di
     }
 
 
-def _pointer(points: pd.DataFrame, residual: np.ndarray) -> dict[str, object]:
+def _features(points: pd.DataFrame) -> tuple[np.ndarray, list[str]]:
+    """The configuration variables that vary (and theta^2 when theta does), with their labels."""
     variables = _configuration_table(points)
     names = [name for name in CONFIGURATION_VARIABLES if np.ptp(variables[name].to_numpy()) > 0]
     features = variables[names].to_numpy(float)
-    features = (
-        np.column_stack([features, features[:, names.index("theta")] ** 2])
-        if ("theta" in names)
-        else features
-    )
-    labels = names + (["theta^2"] if "theta" in names else [])
+    if "theta" not in names:
+        return features, names
+    return np.column_stack([features, features[:, names.index("theta")] ** 2]), [
+        *names,
+        "theta^2",
+    ]
+
+
+def _pointer(points: pd.DataFrame, residual: np.ndarray) -> dict[str, object]:
+    features, labels = _features(points)
     return {
         f"{load}_residual": sparse_terms(features, residual[:, i], labels)
         for i, load in enumerate(LOAD_COLUMNS)
@@ -139,7 +152,8 @@ def diagnose_tunnel(spec: BaselineSpec, paths: Sequence[Path], seed: int) -> Tun
     effects = EffectSet().without(*spec.effects_off)
     baseline = predict_loads(points, effects)
     residual = measured - baseline
-    training, withheld = split_runs(len(points), seed)
+    splits = nested_splits(len(points), seed, ", ".join(str(path) for path in paths))
+    training = splits[0].training
     scales = measured[training].std(axis=0)
     scales = np.where(scales > 0, scales, 1.0)
     steps = {
@@ -147,22 +161,31 @@ def diagnose_tunnel(spec: BaselineSpec, paths: Sequence[Path], seed: int) -> Tun
         for name in spec.effects_off
         if EFFECT_SCOPES[name] != "flight"
     }
-    folds = [(training, withheld)]
+    folds = [(training, splits[0].validation)]
     fits = fit_linear_candidates(residual, steps, scales, folds, ("load_offset", "N (norm)"))
     if spec.candidates:
         fits = {name: fit for name, fit in fits.items() if name in spec.candidates}
-    scored = rank_linear_candidates(residual, fits, scales, folds, seed)
+    rule = linear_null_rule(residual, _features(points)[0], scales, folds, seed)
+    scored = rank_linear_candidates(residual, fits, scales, folds, seed, rule)
     after = scored.best.after
+    split = nested_split_counts(splits, len(points))
+    outer = [([(part.training, part.validation)], part.test) for part in splits]
+    test_after, split["test_choices"] = nested_test(
+        residual, steps, scales, ("load_offset", "N (norm)"), spec.candidates, seed, outer
+    )
+    test = np.concatenate([part.test for part in splits])
     report = assemble_report(
         kind="tunnel",
         spec=spec,
         data_paths=paths,
-        run_counts={"total": len(points), "training": len(training), "withheld": len(withheld)},
+        total_runs=len(points),
+        split=split,
         ranking=scored.ranking,
+        rule=rule,
         channels=LOAD_COLUMNS,
-        sample_counts=np.ones(len(withheld)),
-        before_sse=(residual[withheld] / scales) ** 2,
-        after_sse=(after[withheld] / scales) ** 2,
+        sample_counts=np.ones(len(test)),
+        before_sse=(residual[test] / scales) ** 2,
+        after_sse=(test_after[test] / scales) ** 2,
         where=_where(points, residual, scales),
         pointer=_pointer(points, residual),
         seed=seed,

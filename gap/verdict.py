@@ -1,6 +1,7 @@
 """The diagnosis' verdict: an effect, no gap worth naming, or a gap the library does not explain.
 
-``effect``: the ranking detected one (its best withheld closure is large and significant).
+``effect``: the ranking detected one (its best validation closure passes the calibrated detection
+rule of :mod:`ornitail.gap.detection`).
 ``unexplained``: no candidate closes the gap, yet a large part of the baseline's gap repeats from
 run to run: the input-locked gap, gap_before x sqrt(input-locked fraction), exceeds
 :data:`UNEXPLAINED_GAP` (in units of the measured signals' standard deviation). The sparse

@@ -1,23 +1,56 @@
 """Blind diagnosis of simulated flight logs (through files) whose withheld effect is known."""
 
+import dataclasses
+
 import pytest
 
-from ornitail.gap.flight_diagnosis import diagnose_flight
+from ornitail.gap.flight_data import nested_splits
+from ornitail.gap.flight_diagnosis import FlightDiagnosis, diagnose_flight
 from ornitail.gap.model_spec import read_baseline_spec, write_baseline_spec
+from ornitail.gap.report_text import render_report
 from ornitail.gap.withheld_effects import WithheldCase, simulate_withheld_log, true_magnitudes
 from ornitail.sim.free_flight import write_flight_log_csv
 
 
-def _diagnose(case: WithheldCase, folder) -> dict:
+def _diagnosis(case: WithheldCase, folder, candidates: tuple[str, ...] = ()) -> FlightDiagnosis:
     log = write_flight_log_csv(simulate_withheld_log(case), folder / "flight.csv")
-    spec = read_baseline_spec(write_baseline_spec(case.baseline_spec(), folder / "model.toml"))
-    return diagnose_flight(spec, [log], seed=5).report
+    spec = dataclasses.replace(case.baseline_spec(), candidates=candidates)
+    spec = read_baseline_spec(write_baseline_spec(spec, folder / "model.toml"))
+    return diagnose_flight(spec, [log], seed=5)
+
+
+def _diagnose(case: WithheldCase, folder) -> dict:
+    return _diagnosis(case, folder).report
 
 
 @pytest.fixture(scope="module")
-def added_mass_report(tmp_path_factory):
+def added_mass_diagnosis(tmp_path_factory):
     case = WithheldCase("S4", 105.0, {"added_mass": 3.0}, manoeuvres=16, seed=21)
-    return case, _diagnose(case, tmp_path_factory.mktemp("added_mass"))
+    return case, _diagnosis(case, tmp_path_factory.mktemp("added_mass"))
+
+
+@pytest.fixture(scope="module")
+def added_mass_report(added_mass_diagnosis):
+    case, diagnosis = added_mass_diagnosis
+    return case, diagnosis.report
+
+
+def test_the_gap_is_reported_on_test_manoeuvres_that_neither_fitted_nor_chose(
+    added_mass_diagnosis,
+):
+    _, diagnosis = added_mass_diagnosis
+    report = diagnosis.report
+    split = report["split"]
+    assert (split["training"], split["validation"], split["test"], split["folds"]) == (8, 4, 16, 4)
+    assert sum(split["test_choices"].values()) == 4
+    assert set(split["test_choices"]) <= {"added_mass", "iyy_shift"}
+    for part in nested_splits(16, report["seed"]):
+        assert set(part.test).isdisjoint(set(part.training) | set(part.validation))
+    assert len(diagnosis.after_residuals) == report["runs"]["total"] == 16
+    rule = report["detection_rule"]
+    assert rule["draws"] == 24 and rule["null_closures_quantile_95"] >= rule["null_closures_median"]
+    assert rule["threshold"] == max(rule["null_closures_quantile_95"], rule["materiality_floor"])
+    assert report["ranking"][0]["validation_closure"] > rule["threshold"]
 
 
 def test_added_mass_is_named_with_its_indistinguishable_inertia_twin(added_mass_report):
@@ -34,10 +67,11 @@ def test_the_gap_shrinks_on_withheld_manoeuvres_and_training_predicts_it(added_m
     _, report = added_mass_report
     before, after = report["gap_before"], report["gap_after"]
     assert after["total"] < 0.75 * before["total"]
-    assert report["closure"]["interval"][0] > 0.15  # paired bootstrap over withheld runs
     closure = report["closure"]
-    assert closure["realised_withheld"] == pytest.approx(1 - after["total"] / before["total"])
-    assert abs(closure["predicted_from_training"] - closure["realised_withheld"]) < 0.2
+    assert closure["interval"][0] > 0.15  # paired bootstrap over test runs
+    assert closure["interval"][0] <= closure["realised_test"] <= closure["interval"][1]
+    assert closure["realised_test"] == pytest.approx(1 - after["total"] / before["total"])
+    assert abs(closure["predicted_from_training"] - closure["realised_test"]) < 0.2
     assert set(before["per_channel"]) == {"q", "u", "w", "theta"}
 
 
@@ -59,7 +93,7 @@ def test_no_withheld_effect_gives_no_verdict(tmp_path):
     report = _diagnose(case, tmp_path)
     assert report["verdict"] == "none"
     assert report["effect"] is None
-    assert report["closure"]["realised_withheld"] < 0.15
+    assert report["magnitude"]["at_bound"] in (None, "lower", "upper")
 
 
 def test_input_delay_is_named_and_its_size_recovered(tmp_path):
@@ -68,6 +102,17 @@ def test_input_delay_is_named_and_its_size_recovered(tmp_path):
     assert report["effect"] == "input_delay"
     # the delay is resolved to a fraction of the 1/64 s step by interpolation; 15 % = 10 ms
     assert report["magnitude"]["value"] == pytest.approx(0.07, rel=0.15)
+    assert report["magnitude"]["at_bound"] is None
+
+
+def test_a_drift_beyond_the_candidates_range_is_reported_as_at_least_its_bound(tmp_path):
+    # 0.08 rad/s of logged theta drift; the theta_drift candidate's range ends at 0.05 rad/s
+    case = WithheldCase("S3", 90.0, {"theta_drift": 0.08}, manoeuvres=8, seed=3)
+    report = _diagnosis(case, tmp_path, candidates=("theta_drift", "pitch_damping")).report
+    assert report["best_candidate"] == "theta_drift"
+    assert report["magnitude"]["at_bound"] == "upper"
+    assert report["magnitude"]["value"] == pytest.approx(0.05, abs=1e-3)
+    assert "at least 0.05 rad/s (at the edge of the range)" in render_report(report)
 
 
 def test_a_second_effect_is_found_on_top_of_the_first(tmp_path):
@@ -75,4 +120,6 @@ def test_a_second_effect_is_found_on_top_of_the_first(tmp_path):
     report = _diagnose(case, tmp_path)
     found = {report["effect"], (report["second_effect"] or {}).get("effect")}
     assert found == {"pitch_damping", "theta_drift"}
-    assert report["second_effect"]["closure_beyond_first"] >= 0.15
+    second = report["second_effect"]
+    assert second["validation_closure_beyond_first"] > (second["detection_rule"]["threshold"])
+    assert second["closure_beyond_first"] > 0.1  # on the test runs

@@ -145,3 +145,15 @@ def test_out_of_range_tail_position_and_bad_effect_magnitude(tmp_path):
         ["gap", "example", "--effect", "added_mass=nan", "--out", str(tmp_path)]
     )
     assert "added_mass" in message and "not finite" in message
+
+
+def test_too_few_manoeuvres_to_fit_choose_and_test_is_one_line(tmp_path):
+    arguments = ["gap", "example", "--effect", "added_mass", "--manoeuvres", "5"]
+    result = CliRunner().invoke(main, [*arguments, "--out", str(tmp_path / "ex"), "--json"])
+    assert result.exit_code == 0, result.output
+    example = json.loads(result.output)
+    message = _one_line_error(
+        ["gap", "diagnose", "--model", example["model"], "--data", example["data"]]
+        + ["--out", str(tmp_path / "report")]
+    )
+    assert "flight.csv" in message and "at least 6" in message

@@ -4,16 +4,23 @@ magnitude fit, the flight noise level."""
 import numpy as np
 import pytest
 
-from ornitail.gap.flight_data import FlightRun
+from ornitail.core.errors import UserInputError
+from ornitail.gap.detection import DetectionRule
+from ornitail.gap.flight_data import FlightRun, nested_split_counts, nested_splits
 from ornitail.gap.flight_localisation import unlocked_residual_sd
-from ornitail.gap.intervals import gap_with_interval
-from ornitail.gap.magnitude_fit import fit_magnitude
+from ornitail.gap.intervals import closure_with_interval, gap_with_interval
+from ornitail.gap.magnitude_fit import bound_side, fit_magnitude
 from ornitail.gap.ranking import CandidateEvidence, rank_candidates
+from ornitail.gap.report_text import magnitude_text
 from ornitail.gap.sparse_regression import sparse_terms
 
 
 def _evidence(name: str, sse: np.ndarray, correlation: float = 0.0) -> CandidateEvidence:
     return CandidateEvidence(name, 1.0, "-", 1, sse, float(sse.sum()), correlation)
+
+
+# a null whose 95th percentile is about 0.12 and median 0.06
+NULL = DetectionRule("test", np.linspace(0.0, 0.125, 25))
 
 
 def test_identical_families_form_one_set_and_a_clear_winner_stands_alone():
@@ -22,7 +29,7 @@ def test_identical_families_form_one_set_and_a_clear_winner_stands_alone():
     effect = base * 0.25  # closes 1 - sqrt(0.25) = 50 %
     other = base * 0.81  # closes 10 %
     evidence = [_evidence("a", effect), _evidence("b", effect.copy()), _evidence("c", other)]
-    ranking = rank_candidates(evidence, base, float(base.sum()), 0.0, 1000, seed=0)
+    ranking = rank_candidates(evidence, base, float(base.sum()), 0.0, 1000, seed=0, rule=NULL)
     assert set(ranking.top_set) == {"a", "b"}
     assert ranking.detected
     assert ranking.entries[0].heldout_closure == pytest.approx(0.5, abs=1e-12)
@@ -30,11 +37,80 @@ def test_identical_families_form_one_set_and_a_clear_winner_stands_alone():
     assert ranking.top_set_confidence == pytest.approx(1.0)
 
 
-def test_a_small_closure_is_not_detected():
+def test_a_closure_below_the_calibrated_threshold_is_not_detected():
     base = np.full(10, 10.0)
-    evidence = [_evidence("a", base * 0.9**2)]  # closes exactly 10 %, below the 15 % floor
-    ranking = rank_candidates(evidence, base, 100.0, 0.0, 1000, seed=0)
+    evidence = [_evidence("a", base * 0.89**2)]  # closes exactly 11 %, below the null's 12 %
+    assert NULL.threshold == pytest.approx(0.12, abs=0.005)
+    assert not rank_candidates(evidence, base, 100.0, 0.0, 1000, seed=0, rule=NULL).detected
+    lower_null = DetectionRule("test", NULL.closures - 0.05)  # same closure, a weaker null
+    assert lower_null.threshold == pytest.approx(0.10)  # its 95th percentile is below the floor
+    assert rank_candidates(evidence, base, 100.0, 0.0, 1000, seed=0, rule=lower_null).detected
+    assert not rank_candidates(evidence, base, 100.0, 0.0, 1000, seed=0).detected  # no rule
+    small = [_evidence("a", base * 0.92**2)]  # 8 %: beats this null, not the materiality floor
+    assert not rank_candidates(small, base, 100.0, 0.0, 1000, seed=0, rule=lower_null).detected
+
+
+def test_a_closure_carried_by_one_run_is_not_detected():
+    """Above the null's 95th percentile on the runs observed, but its 5 % bootstrap quantile is
+    not above the null's median: one run of ten carries the whole closure."""
+    base = np.full(10, 10.0)
+    base[0] = 40.0
+    after = base.copy()
+    after[0] = 0.0  # closes 1 - sqrt(90 / 130) = 17 %, all of it on run 0
+    evidence = [_evidence("a", after)]
+    ranking = rank_candidates(evidence, base, 130.0, 0.0, 1000, seed=0, rule=NULL)
+    assert ranking.entries[0].heldout_closure > NULL.threshold
+    assert ranking.entries[0].closure_interval[0] < NULL.median
     assert not ranking.detected
+
+
+def test_test_runs_are_disjoint_from_training_and_validation_in_every_fold():
+    for count in (6, 7, 13, 20, 41):
+        folds = nested_splits(count, seed=3)
+        for part in folds:
+            sets = [set(part.training), set(part.validation), set(part.test)]
+            assert sets[0].isdisjoint(sets[1]) and sets[0].isdisjoint(sets[2])
+            assert sets[1].isdisjoint(sets[2])
+            assert set().union(*sets) == set(range(count))
+            assert min(len(runs) for runs in sets) >= 2
+        tested = np.concatenate([part.test for part in folds])
+        assert sorted(tested) == list(range(count))  # every run a test run exactly once
+    folds = nested_splits(20, seed=3)
+    assert [(len(p.training), len(p.validation), len(p.test)) for p in folds] == [(10, 5, 5)] * 4
+    counts = nested_split_counts(folds, 20)
+    assert (counts["training"], counts["validation"], counts["test"], counts["folds"]) == (
+        10,
+        5,
+        20,
+        4,
+    )
+    with pytest.raises(UserInputError, match="5 runs.*at least 6"):
+        nested_splits(5, seed=3, where="flight.csv")
+
+
+def test_closure_interval_is_paired_over_runs():
+    before = np.array([4.0, 5.0, 6.0, 5.0])
+    closure, (low, high) = closure_with_interval(before, 0.25 * before, seed=1)
+    assert (
+        closure == pytest.approx(0.5) and low == pytest.approx(0.5) and high == pytest.approx(0.5)
+    )
+
+
+def test_a_magnitude_on_its_bound_is_reported_as_a_limit():
+    assert bound_side(-0.1, (-0.1, 0.25)) == "lower"
+    assert bound_side(-0.0999, (-0.1, 0.25)) == "lower"  # within 0.5 % of the range
+    assert bound_side(0.2495, (-0.1, 0.25)) == "upper"
+    assert bound_side(0.05, (-0.1, 0.25)) is None
+    assert bound_side(5.0, None) is None
+    text = magnitude_text({"value": -0.1, "unit": "s", "at_bound": "lower"})
+    assert text == "at most -0.1 s (at the edge of the range)"
+    assert magnitude_text({"value": 0.05, "unit": "rad/s", "at_bound": "upper"}).startswith(
+        "at least 0.05"
+    )
+    assert magnitude_text({"value": 0.07, "unit": "s", "at_bound": None}) == "0.07 s"
+    evidence = CandidateEvidence("d", -0.1, "s", 1, np.ones(4), 4.0, 0.0, bounds=(-0.1, 0.25))
+    ranking = rank_candidates([evidence], np.full(4, 2.0), 8.0, 0.0, 100, seed=0, rule=NULL)
+    assert ranking.entries[0].at_bound == "lower"
 
 
 def test_ties_are_ordered_by_the_drop_of_input_correlation():
