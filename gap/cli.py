@@ -105,7 +105,7 @@ def _parse_effect(text: str) -> tuple[str, float | None]:
 @click.option("--x-h-mm", type=float, default=98.0, show_default=True, help="Tail position, mm.")
 @click.option(
     "--manoeuvres",
-    type=click.IntRange(4, 200),
+    type=click.IntRange(6, 200),  # gap.flight_data.MINIMUM_MANOEUVRES (tests/gap/test_gap_cli.py)
     default=20,
     show_default=True,
     help="Doublet manoeuvres in the flight.",
@@ -162,7 +162,7 @@ def example_command(
 )
 @click.option(
     "--manoeuvres",
-    type=click.IntRange(6, 200),
+    type=click.IntRange(6, 200),  # gap.flight_data.MINIMUM_MANOEUVRES (tests/gap/test_gap_cli.py)
     default=20,
     show_default=True,
     help="Doublet manoeuvres per case.",

@@ -157,3 +157,12 @@ def test_too_few_manoeuvres_to_fit_choose_and_test_is_one_line(tmp_path):
         + ["--out", str(tmp_path / "report")]
     )
     assert "flight.csv" in message and "at least 6" in message
+
+
+def test_the_example_and_the_benchmark_refuse_fewer_manoeuvres_than_a_diagnosis_needs():
+    from ornitail.gap.cli import gap_group
+    from ornitail.gap.flight_data import MINIMUM_MANOEUVRES
+
+    for name in ("example", "benchmark"):
+        (option,) = [p for p in gap_group.commands[name].params if p.name == "manoeuvres"]
+        assert option.type.min == MINIMUM_MANOEUVRES
