@@ -18,6 +18,7 @@ board, is raised by the next
 from __future__ import annotations
 
 import contextlib
+import math
 import queue
 import termios
 import threading
@@ -269,7 +270,17 @@ class SerialDaqDriver:
                 f"(ceiling = {self.baud} baud / 250 bits per frame for {self.name})",
             )
         self.query(f"RATE {sample_rate_hz:g}")
-        self.sample_rate_hz = float(self.query("RATE?").split()[1])
+        reply = self.query("RATE?")
+        words = reply.split()
+        try:
+            rate_hz = float(words[1])
+        except (IndexError, ValueError):
+            rate_hz = math.nan
+        if len(words) != 2 or words[0] != "RATE" or not (math.isfinite(rate_hz) and rate_hz > 0):
+            raise InstrumentReplyError(
+                self.name, f"malformed reply to 'RATE?' on {self.port}: {printable_excerpt(reply)}"
+            )
+        self.sample_rate_hz = rate_hz
 
     # -- streaming --------------------------------------------------------------------------
     def start(self) -> None:

@@ -12,13 +12,16 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 
+from ornitail.acquisition.instrument_errors import InstrumentError
 from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE
 from ornitail.acquisition.sweep import SweepEvent, run_sweep
 from ornitail.acquisition.sweep_plan import load_plan
 from ornitail.balance.sweep_table import cycle_averaged_table
+from ornitail.core.errors import UserInputError
 
 STUDY_PLAN = Path(__file__).resolve().parents[1] / "acquisition" / "data" / "study_tunnel_plan.toml"
 
@@ -41,9 +44,18 @@ def main() -> None:
     parser.add_argument("--time-scale", type=float, default=4.0, help="simulated rigs only")
     arguments = parser.parse_args()
 
-    plan = load_plan(arguments.plan)
-    with Rig.from_file(arguments.rig, time_scale=arguments.time_scale) as rig:
-        result = run_sweep(plan, rig, arguments.data_root, on_event=print_progress)
+    try:
+        plan = load_plan(arguments.plan)
+        with Rig.from_file(arguments.rig, time_scale=arguments.time_scale) as rig:
+            result = run_sweep(plan, rig, arguments.data_root, on_event=print_progress)
+    except UserInputError as error:  # a mistake in the plan, the rig file or the options
+        print(f"headless_sweep: error: {error}", file=sys.stderr)
+        sys.exit(2)
+    except (
+        InstrumentError
+    ) as error:  # absent or silent instrument; the rig was made safe on the way out
+        print(f"headless_sweep: error: {error}", file=sys.stderr)
+        sys.exit(3)
     print(f"sweep {result.status}: {result.message}")
     for directory in result.run_directories:
         print(f"  run {directory}")

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ornitail.acquisition.daq_protocol import CHANNEL_NAMES, VOLTS_PER_COUNT
-from ornitail.acquisition.instrument_errors import InstrumentDisconnected
+from ornitail.acquisition.instrument_errors import InstrumentDisconnected, InstrumentReplyError
 from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
 from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
 from ornitail.core.errors import UserInputError
@@ -188,3 +188,22 @@ def test_a_reply_with_binary_bytes_is_named_by_size_not_printed():
 
     assert printable_excerpt(bytes(range(256)) * 100) == "25600 bytes of binary data"
     assert printable_excerpt(b"ID model=X\n") == "'ID model=X'"
+
+
+@pytest.mark.parametrize("garbled", ["RATE", "RATE fast", "10000", "RATE -5"])
+def test_a_malformed_rate_reply_is_one_instrument_error_naming_it(
+    simulated_daq, daq_driver, garbled
+):
+    """A board answering ``RATE?`` out of protocol (docs/daq-protocol.md: ``RATE 10000``) is refused by name."""
+    answer = simulated_daq._handle_command
+
+    def answer_rate_garbled(command: str) -> None:
+        if command.strip().upper() == "RATE?":
+            simulated_daq._reply(garbled)
+        else:
+            answer(command)
+
+    simulated_daq._handle_command = answer_rate_garbled
+    with pytest.raises(InstrumentReplyError, match=r"malformed reply to 'RATE\?'") as raised:
+        daq_driver.set_sample_rate(10_000)
+    assert "\n" not in str(raised.value)

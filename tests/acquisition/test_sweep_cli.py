@@ -151,3 +151,49 @@ def test_example_headless_script_runs_a_sweep(tmp_path):
     assert "sweep completed: recorded 8 of 8 set points" in completed.stdout
     # Progress lines of the 4 steady-state records, then the 4 rows of the table.
     assert completed.stdout.count("steady_state") == 8
+
+
+def test_example_headless_script_says_in_one_line_what_stopped_it(tmp_path):
+    """A missing plan is exit 2, an absent instrument exit 3, each one line on stderr, no traceback."""
+    script = str(REPOSITORY / "examples" / "headless_sweep.py")
+    missing_plan = subprocess.run(
+        [
+            sys.executable,
+            script,
+            "--plan",
+            str(tmp_path / "none.toml"),
+            "--data-root",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert missing_plan.returncode == 2
+    assert missing_plan.stderr.strip().splitlines() == [
+        f"headless_sweep: error: {tmp_path / 'none.toml'}: file not found"
+    ]
+    rig = tmp_path / "rig.toml"
+    rig.write_text(
+        (REPOSITORY / "acquisition" / "data" / "simulated_rig.toml")
+        .read_text()
+        .replace("simulated = true", "simulated = false")
+        .replace(
+            '"calibration/FT8884.cal"',
+            f'"{REPOSITORY / "acquisition/data/calibration/FT8884.cal"}"',
+        )
+        .replace('"tunnel_table.csv"', f'"{REPOSITORY / "acquisition/data/tunnel_table.csv"}"')
+        .replace("/dev/ttyUSB0", str(tmp_path / "no-fan-port"))
+    )
+    absent = subprocess.run(
+        [sys.executable, script, "--rig", str(rig), "--data-root", str(tmp_path / "data")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert absent.returncode == 3, absent.stderr
+    (line,) = absent.stderr.strip().splitlines()
+    assert (
+        line.startswith("headless_sweep: error: tunnel fan: cannot open port")
+        and "no-fan-port" in line
+    )
