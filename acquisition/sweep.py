@@ -437,33 +437,62 @@ def _settle(context: _SweepContext, point: SetPoint) -> float:
 
 @dataclass
 class RecordConditions:
-    """The rig's conditions read while one record's rows arrive, every ``POLL_INTERVAL_S`` of rig time.
+    """The rig's conditions read around one record, every ``POLL_INTERVAL_S`` of rig time, and where each reading
+    falls on the balance's sample count.
 
     The set point is reached only within the settle tolerances and the fan still creeps towards it during the
-    record (first-order lag), so the conditions the loads belong to are these means, not the set values.
-    Velocity in m/s from the fan's rpm and the tunnel table, pitch in rad from the strut, motor speed in rpm.
+    record (first-order lag), so the conditions the loads belong to are these, not the set values. The readings
+    reach the control computer later than the samples they go with (rows arrive after their latency), and a creeping
+    fan makes that a bias: the mean of the raw readings sat about 0.1 mm/s above the record's, which moved Z0 and M0
+    by one to two of their sigmas. So each condition is fitted with a straight line in the sample count and taken
+    at the record's middle sample (the record's mean of a quantity changing linearly). Velocity in m/s from the
+    fan's rpm and the tunnel table, pitch in rad from the strut, motor speed in rpm.
     """
 
+    first_sample: int
+    """The record's first sample, counted as :meth:`Rig.balance_samples_since_start` counts."""
+    samples: int
+    sample_counts: list[int] = field(default_factory=list)
     velocities_m_s: list[float] = field(default_factory=list)
     pitches_rad: list[float] = field(default_factory=list)
     motor_rpms: list[float] = field(default_factory=list)
 
     def read(self, rig: Rig) -> None:
         """Take one reading of every condition the rig can report."""
+        self.sample_counts.append(rig.balance_samples_since_start())
         self.velocities_m_s.append(rig.read_tunnel_velocity_m_s())
         self.pitches_rad.append(rig.read_pitch_rad())
         if rig.motor is not None:
             self.motor_rpms.append(rig.motor.read_rpm())
 
     def motor_rpm_mean(self) -> float | None:
-        """Mean motor speed over the record, rpm (None without a motor)."""
+        """Mean motor speed over the readings, rpm (None without a motor)."""
         return math.fsum(self.motor_rpms) / len(self.motor_rpms) if self.motor_rpms else None
 
+    def at_record_middle(self, values: list[float]) -> float:
+        """``values`` (one per reading) on a least-squares line in the sample count, at the record's middle."""
+        middle = self.first_sample + 0.5 * (self.samples - 1)
+        count = len(values)
+        mean_count = math.fsum(self.sample_counts) / count
+        mean_value = math.fsum(values) / count
+        spread = math.fsum((c - mean_count) ** 2 for c in self.sample_counts)
+        if count < 2 or spread <= 0.0:
+            return mean_value
+        slope = (
+            math.fsum(
+                (c - mean_count) * (v - mean_value)
+                for c, v in zip(self.sample_counts, values, strict=True)
+            )
+            / spread
+        )
+        return mean_value + slope * (middle - mean_count)
+
     def journal_values(self) -> dict[str, float | int]:
-        """The means for the set point's ``extra`` (``tunnel_velocity_mean_m_s``, ``pitch_mean_rad``)."""
+        """For the set point's ``extra``: ``tunnel_velocity_mean_m_s`` and ``pitch_mean_rad`` (the record's
+        mean, from the line through the readings), ``condition_readings``."""
         return {
-            "tunnel_velocity_mean_m_s": math.fsum(self.velocities_m_s) / len(self.velocities_m_s),
-            "pitch_mean_rad": math.fsum(self.pitches_rad) / len(self.pitches_rad),
+            "tunnel_velocity_mean_m_s": self.at_record_middle(self.velocities_m_s),
+            "pitch_mean_rad": self.at_record_middle(self.pitches_rad),
             "condition_readings": len(self.velocities_m_s),
         }
 
@@ -472,19 +501,18 @@ def _take_rows(
     context: _SweepContext, recorder: Recorder, count: int
 ) -> tuple[int, RecordConditions]:
     """Wait for ``count`` rows sampled from now on; return the first one's row index and the conditions read
-    while they arrived."""
+    from then until they arrived."""
     _wait_rig_s(context, RECORD_START_DELAY_S)
     samples_since_start = context.rig.balance_samples_since_start()
-    first = context.stream.first_row_sampled_after(samples_since_start)
-    while first is None:
-        _wait_rig_s(context, 0.05)
-        first = context.stream.first_row_sampled_after(samples_since_start)
-    conditions = RecordConditions()
+    conditions = RecordConditions(samples_since_start, count)
+    first = None
     while True:
         conditions.read(context.rig)
         if conditions.motor_rpms:
             context.observe_motor(conditions.motor_rpms[-1] > 0.0)
-        if recorder.next_sample_index >= first + count:
+        if first is None:
+            first = context.stream.first_row_sampled_after(samples_since_start)
+        if first is not None and recorder.next_sample_index >= first + count:
             return first, conditions
         _wait_rig_s(context, POLL_INTERVAL_S)
 
