@@ -153,6 +153,19 @@ def extrapolation_notes(proposal: Proposal, trend_model: TrendModel) -> dict[str
     }
 
 
+def honest_status(proposal: Proposal, extrapolated: int, trends: int) -> str:
+    """The solver status, saying "targets met by extrapolation" when the design lies outside the fitted data of
+    ``extrapolated`` of the ``trends`` trends (their intervals assume the trend holds there)."""
+    if not (proposal.targets_met and extrapolated):
+        return proposal.solver_status
+    return proposal.solver_status.replace(
+        "targets met",
+        f"targets met by extrapolation ({extrapolated} of {trends} trends outside their fitted data; "
+        "their intervals assume the trend holds there)",
+        1,
+    )
+
+
 def proposal_result(proposal: Proposal, trend_model: TrendModel) -> dict[str, Any]:
     """The proposal as a plain dict with user-facing units (mm, cm^2, deg) in the field names."""
     evaluation = proposal.evaluation
@@ -164,10 +177,12 @@ def proposal_result(proposal: Proposal, trend_model: TrendModel) -> dict[str, An
     }
     if "f_ss_hz" in quantities:
         steady["f_ss_hz"] = _interval_dict(quantities["f_ss_hz"])
+    notes = extrapolation_notes(proposal, trend_model)
     return {
         "objective": proposal.objective,
-        "solver_status": proposal.solver_status,
+        "solver_status": honest_status(proposal, len(notes), len(trend_model.trends)),
         "targets_met": proposal.targets_met,
+        "targets_met_inside_fitted_data": proposal.targets_met and not notes,
         "unmet_targets": {
             f"{name}_miss{('_' + _UNMET_UNITS[name][0].replace('/', '_')) if _UNMET_UNITS[name][0] else ''}": miss
             * _UNMET_UNITS[name][1]
@@ -200,7 +215,7 @@ def proposal_result(proposal: Proposal, trend_model: TrendModel) -> dict[str, An
         "iyy_kg_m2": quantities["iyy_kg_m2"].value,
         "mass_source": list(quantities["mass_kg"].sources),
         "max_extrapolation_mahalanobis": evaluation.max_extrapolation,
-        "extrapolation_notes": extrapolation_notes(proposal, trend_model),
+        "extrapolation_notes": notes,
         "trend_sources": sorted({s for t in trend_model.trends.values() for s in t.sources}),
         "starts_tried": proposal.starts_tried,
         "starts_converged": proposal.starts_converged,

@@ -274,6 +274,10 @@ def test_propose_command_on_study_data(tmp_path: Path) -> None:
     notes = answer["extrapolation_notes"]
     assert {"Mq", "Xu", "Mu"} <= set(notes) and "theta_ss_rad" not in notes
     assert "every fitted observation has 0.098" in notes["Mq"]
+    # The headline says so: never a plain "targets met" outside the fitted data.
+    assert answer["targets_met_inside_fitted_data"] is False
+    if answer["targets_met"]:
+        assert answer["solver_status"].startswith("targets met by extrapolation (")
     for path in answer["files"].values():
         assert Path(path).stat().st_size > 0
 
