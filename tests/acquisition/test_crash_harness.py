@@ -8,12 +8,12 @@ generous deadlines, and nothing is asserted about timing.
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import random
 import sys
 from pathlib import Path
 
+import crash_harness as harness
 import pytest
 
 from ornitail.acquisition.recording_reader import load_recording
@@ -22,18 +22,6 @@ REPOSITORY = Path(__file__).resolve().parents[2]
 ORNITAIL = str(Path(sys.executable).parent / "ornitail")
 DEADLINE_S = 240.0
 
-
-def _load_harness():
-    spec = importlib.util.spec_from_file_location(
-        "ornitail_crash_harness", REPOSITORY / "benchmarks" / "crash_harness.py"
-    )
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up there
-    spec.loader.exec_module(module)
-    return module
-
-
-harness = _load_harness()
 
 # One run of three points: a wind-off tare, the steady state, one velocity offset.
 PLAN = """

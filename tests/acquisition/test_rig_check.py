@@ -7,12 +7,12 @@ or a failed sweep sent them. Every wait is on a process exit; nothing is asserte
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import subprocess
 import sys
 from pathlib import Path
 
+import crash_harness as harness
 import pytest
 
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE
@@ -43,19 +43,6 @@ steady_state_repeats = 1
 tailless_points = "none"
 record_s = 0.5
 """
-
-
-def _load_harness():
-    spec = importlib.util.spec_from_file_location(
-        "ornitail_crash_harness", REPOSITORY / "benchmarks" / "crash_harness.py"
-    )
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up there
-    spec.loader.exec_module(module)
-    return module
-
-
-harness = _load_harness()
 
 
 def run_ornitail(*arguments: str) -> subprocess.CompletedProcess:

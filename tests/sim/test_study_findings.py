@@ -8,19 +8,11 @@ that the Table 4 derivatives imply.
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
+import study_findings as study
 
 # The simulator's trims and the study's numbers come from the benchmark that prints the same findings (one home).
-_PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "study_findings.py"
-_SPEC = importlib.util.spec_from_file_location("ornitail_study_findings", _PATH)
-study = importlib.util.module_from_spec(_SPEC)
-sys.modules[_SPEC.name] = study
-_SPEC.loader.exec_module(study)
 
 POSITIONS_MM, AREA_SERIES, ASPECT_SERIES = (
     study.POSITIONS_MM,
