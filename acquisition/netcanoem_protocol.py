@@ -16,7 +16,7 @@ import struct
 
 import numpy as np
 
-from ornitail.core.constants import STANDARD_GRAVITY_M_S2
+from ornitail.vehicle.constants import STANDARD_GRAVITY_M_S2
 
 DEFAULT_BASE_ID = 0x20
 OPCODE_READ_GAUGES = 0x0

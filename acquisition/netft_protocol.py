@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ornitail.core.constants import STANDARD_GRAVITY_M_S2
+from ornitail.vehicle.constants import STANDARD_GRAVITY_M_S2
 
 RDT_PORT = 49152
 REQUEST_HEADER = 0x1234

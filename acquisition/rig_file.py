@@ -16,10 +16,10 @@ from ornitail.acquisition.daq_protocol import DEFAULT_BAUD, link_ceiling_frames_
 from ornitail.acquisition.line_instrument_connection import DEFAULT_LINE_BAUD
 from ornitail.acquisition.netcanoem_protocol import DEFAULT_BASE_ID, gauge_sample_rate_ceiling_hz
 from ornitail.calibration.tool_transform import ToolTransform
-from ornitail.core.constants import DELFLY_GEAR_RATIO
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import read_toml_file
 from ornitail.core.toml_table import TomlTable
+from ornitail.vehicle.constants import DELFLY_GEAR_RATIO
 
 DEFAULT_RIG_FILE = Path(__file__).parent / "data" / "simulated_rig.toml"
 BALANCE_ROUTES = ("serial_daq", "can")

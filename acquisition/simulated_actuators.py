@@ -13,7 +13,7 @@ from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
 from ornitail.acquisition.simulated_clock import SimulatedClock
 from ornitail.acquisition.simulated_line_instrument import SimulatedLineInstrument, first_order_step
 from ornitail.calibration.tunnel_table import TunnelVelocityTable
-from ornitail.core.constants import DELFLY_GEAR_RATIO
+from ornitail.vehicle.constants import DELFLY_GEAR_RATIO
 
 
 def _parse_number(words: list[str]) -> float | None:

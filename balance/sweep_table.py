@@ -57,8 +57,8 @@ from ornitail.calibration.flapping_frequency_check import (
     check_flapping_frequency,
 )
 from ornitail.calibration.tool_transform import ToolTransform
-from ornitail.core.constants import DELFLY_GEAR_RATIO, STANDARD_GRAVITY_M_S2
 from ornitail.core.errors import UserInputError
+from ornitail.vehicle.constants import DELFLY_GEAR_RATIO, STANDARD_GRAVITY_M_S2
 
 GAUGE_CHANNELS = tuple(f"gauge_{index}_v" for index in range(6))
 SATURATION_COLUMNS = (

@@ -21,12 +21,12 @@ import numpy as np
 from scipy.optimize import NonlinearConstraint, differential_evolution
 
 from ornitail.design.design_evaluation import a_matrix_of_quantities, mass_inertia_model_for
-from ornitail.design.geometry import BASE_TAIL_CORNER_SETBACK_M, BASE_TAIL_SPAN_M
 from ornitail.design.linear_model import modal_summary
 from ornitail.design.pareto import pareto_front
 from ornitail.design.proposal import DesignTargets, ProposalProblem, TargetBand, propose
 from ornitail.design.trend_data import observations_from_study_tables
 from ornitail.design.trends import fit_trends
+from ornitail.vehicle.geometry import BASE_TAIL_CORNER_SETBACK_M, BASE_TAIL_SPAN_M
 
 X_H_M = 0.057
 THETA_RAD = math.radians(25.0)

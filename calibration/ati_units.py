@@ -9,8 +9,8 @@ strings are refused: silently treating ``"lbf-in"`` as ``"N-m"`` would scale eve
 
 from __future__ import annotations
 
-from ornitail.core.constants import STANDARD_GRAVITY_M_S2
 from ornitail.core.errors import UserInputError
+from ornitail.vehicle.constants import STANDARD_GRAVITY_M_S2
 
 NEWTONS_PER_POUND_FORCE = 4.4482216152605
 METRES_PER_INCH = 0.0254

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ornitail.core.constants import DELFLY_GEAR_RATIO
+from ornitail.vehicle.constants import DELFLY_GEAR_RATIO
 
 DEFAULT_RELATIVE_TOLERANCE = 0.02
 

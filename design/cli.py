@@ -35,7 +35,7 @@ def geometry_result(
     b_mm: float, b_le_mm: float | None, c_r_mm: float, c_t_mm: float
 ) -> dict[str, Any]:
     """S (cm^2), AR and the dimensions of a valid planform; an invalid one raises UserInputError."""
-    from ornitail.design.geometry import TailGeometry
+    from ornitail.vehicle.geometry import TailGeometry
 
     geometry = TailGeometry.from_mm(b_mm, b_le_mm, c_r_mm, c_t_mm)
     geometry.validate("--b/--b-le/--c-r/--c-t")

@@ -25,7 +25,6 @@ from typing import Any
 import numpy as np
 
 from ornitail.core.errors import UserInputError
-from ornitail.design.geometry import TailGeometry
 from ornitail.design.linear_model import (
     A_MATRIX_DERIVATIVES,
     ModalSummary,
@@ -33,6 +32,7 @@ from ornitail.design.linear_model import (
     a_matrix_entries,
     modal_summary,
 )
+from ornitail.vehicle.geometry import TailGeometry
 
 STEADY_STATE_QUANTITIES = ("theta_ss_rad", "v_ss_m_s", "f_ss_hz")
 MASS_QUANTITIES = ("mass_kg", "iyy_kg_m2")

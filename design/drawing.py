@@ -17,7 +17,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ornitail.design.geometry import TailGeometry, base_tail_outline_vertices_m  # noqa: E402
+from ornitail.vehicle.geometry import TailGeometry, base_tail_outline_vertices_m  # noqa: E402
 
 CUT_FILE_MARGIN_MM = 5.0
 

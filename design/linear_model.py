@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ornitail.core.constants import STANDARD_GRAVITY_M_S2
+from ornitail.vehicle.constants import STANDARD_GRAVITY_M_S2
 
 STATE_NAMES = ("q", "u", "w", "theta")
 A_MATRIX_DERIVATIVES = ("Mq", "Mu", "Mw", "Xq", "Xu", "Xw", "Zq", "Zu", "Zw")

@@ -21,8 +21,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from ornitail.design.geometry import study_tails
 from ornitail.design.trend_basis import hexagon_area_m2
+from ornitail.vehicle.geometry import study_tails
 
 TAIL_AREAL_DENSITY_KG_M2 = 0.03
 FUSELAGE_EXTENSION_KG_M = 0.017

@@ -49,21 +49,21 @@ from ornitail.design.design_evaluation import (
     mass_inertia_model_for,
     require_model_quantities,
 )
-from ornitail.design.geometry import (
+from ornitail.design.linear_model import (
+    characteristic_polynomial,
+    modal_summary,
+    quadratic_factor_coefficients,
+)
+from ornitail.vehicle.geometry import (
     BASE_TAIL_CHORD_M,
     BASE_TAIL_CORNER_SETBACK_M,
     BASE_TAIL_SPAN_M,
     TailGeometry,
     study_fuselages_x_h_m,
 )
-from ornitail.design.linear_model import (
-    characteristic_polynomial,
-    modal_summary,
-    quadratic_factor_coefficients,
-)
 
 FUSELAGE_X_H_M = dict(sorted(study_fuselages_x_h_m().items(), key=lambda item: item[1]))
-"""The study's fuselages (``design/data/fuselages.csv``): tail position x_h in metres, shortest first."""
+"""The study's fuselages (``vehicle/data/fuselages.csv``): tail position x_h in metres, shortest first."""
 OBJECTIVES = ("min-area", "max-damping", "closest")
 INTERVAL_KINDS = ("mean", "new")
 TARGET_NAMES = ("theta_ss", "v_ss", "f_ss", "damping_ratio", "natural_frequency")

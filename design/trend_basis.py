@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ornitail.core.errors import UserInputError
-from ornitail.design.geometry import TailGeometry
+from ornitail.vehicle.geometry import TailGeometry
 
 
 def hexagon_area_m2(

@@ -3,7 +3,7 @@
 One :class:`TrendObservation` is one measured value of one quantity for one configuration (a tail at a tail
 position x_h). Sources (format of each: docs/design-trends.md):
 
-- the study's published tables, shipped as package data with their citation (``design/data/``): Table 3, steady
+- the study's published tables, shipped as package data with their citation (``vehicle/data/``): Table 3, steady
   states of six tails at x_h = 57 mm (source ``"study-table-3"``), and Table 4, derivatives of S1, S2, S3, S5 at
   x_h = 98 mm (``"study-table-4"``), read with the signs of Mu, Mw, Xq and Zq flipped into ornitail's frame
   (docs/frames.md);
@@ -22,13 +22,18 @@ import csv
 import math
 import re
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import read_input_text, read_json_file
-from ornitail.design.geometry import TailGeometry, study_fuselages_x_h_m, study_tails
+from ornitail.vehicle.geometry import TailGeometry, study_fuselages_x_h_m, study_tails
+from ornitail.vehicle.study_tables import (
+    STUDY_SIGN_FLIPPED_DERIVATIVES,
+    STUDY_TABLE_3,
+    STUDY_TABLE_4,
+    study_table_rows,
+)
 
 QUANTITIES = (
     "theta_ss_rad",
@@ -52,10 +57,8 @@ MASS_QUANTITIES = ("mass_kg", "iyy_kg_m2")
 """Mass properties, fitted when a campaign table gives them (preferred by design/mass_model.py)."""
 ALL_QUANTITIES = QUANTITIES + MASS_QUANTITIES
 
-STUDY_SIGN_FLIPPED_DERIVATIVES = ("Mu", "Mw", "Xq", "Zq")
-"""Table 4 derivatives whose published sign is flipped into ornitail's frame (docs/frames.md)."""
 STUDY_FUSELAGE_X_H_MM = {letter: 1e3 * x_h_m for letter, x_h_m in study_fuselages_x_h_m().items()}
-"""Fuselage letter -> x_h (mm), Table 1 of the study (``design/data/fuselages.csv``)."""
+"""Fuselage letter -> x_h (mm), Table 1 of the study (``vehicle/data/fuselages.csv``)."""
 
 _DERIVED_SIGMA_MAX_RELATIVE_ROUNDING = 0.5
 _CAMPAIGN_STEADY_COLUMNS = {
@@ -84,11 +87,6 @@ class TrendObservation:
     value: float
     sigma: float | None
     source: str
-
-
-def _package_table(name: str) -> list[dict[str, str]]:
-    text = resources.files("ornitail.design").joinpath(f"data/{name}").read_text()
-    return list(csv.DictReader(line for line in text.splitlines() if not line.startswith("#")))
 
 
 def _study_geometry(tail_id: str, where: str) -> TailGeometry:
@@ -138,7 +136,7 @@ def observations_from_study_table_3() -> list[TrendObservation]:
         ("f_ss_hz", "f", float),
     )
     observations = []
-    for row in _package_table("study_table3_steady_states_xh57.csv"):
+    for row in study_table_rows(STUDY_TABLE_3):
         tail_id, x_h_m = _split_study_configuration(row["tail"])
         geometry = _study_geometry(tail_id, "study table 3")
         for quantity, prefix, to_si in columns:
@@ -164,7 +162,7 @@ def observations_from_study_table_4() -> list[TrendObservation]:
     """Table 4: derivatives of S1, S2, S3, S5 at x_h = 98 mm in ornitail's frame (Mu, Mw, Xq, Zq flipped);
     sigma = rel_sigma_pct / 100 * |value|."""
     observations = []
-    for row in _package_table("study_table4_derivatives_xh98.csv"):
+    for row in study_table_rows(STUDY_TABLE_4):
         tail_id, x_h_m = _split_study_configuration(row["config"])
         published = float(row["value"])
         sign = -1.0 if row["parameter"] in STUDY_SIGN_FLIPPED_DERIVATIVES else 1.0

@@ -33,9 +33,9 @@ import numpy as np
 from scipy import stats
 
 from ornitail.core.errors import UserInputError
-from ornitail.design.geometry import TailGeometry
 from ornitail.design.trend_basis import TrendBasis, trend_basis
 from ornitail.design.trend_data import ALL_QUANTITIES, TrendObservation
+from ornitail.vehicle.geometry import TailGeometry
 
 _CONSTANT_FEATURE_RELATIVE_SPREAD = 1e-9
 _RANK_TOLERANCE = 1e-10

@@ -11,10 +11,10 @@ import click
 from ornitail.core.errors import UserInputError, require_finite
 from ornitail.core.input_files import prepare_output_directory
 from ornitail.core.output import emit, json_option, to_jsonable
-from ornitail.design.geometry import TailGeometry
 from ornitail.design.propose_cli import X_H_RANGE_MM
 from ornitail.design.trend_sources import gather_observations, trend_source_options
 from ornitail.design.trends import fit_trends
+from ornitail.vehicle.geometry import TailGeometry
 
 _PREDICT_OPTIONS = ("predict_b", "predict_b_le", "predict_c_r", "predict_c_t", "predict_x_h_mm")
 

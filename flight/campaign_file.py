@@ -20,10 +20,10 @@ from typing import Any
 
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import read_toml_file
-from ornitail.design.geometry import TailGeometry, study_tails
 from ornitail.flight.manoeuvres import DEFAULT_GLITCH_RULE, GLITCH_RULES
 from ornitail.flight.model_file import INPUT_HOLDS
 from ornitail.flight.validation import DEFAULT_SELECTION_RULE, SELECTION_RULES
+from ornitail.vehicle.geometry import TailGeometry, study_tails
 
 CONFIGURATION_LABEL = re.compile(r"^(?P<tail>[A-Za-z][A-Za-z0-9_]*)@(?P<x_h_mm>[0-9.]+)$")
 DEFAULT_SIMULATED_MANOEUVRES = 21

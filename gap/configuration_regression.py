@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import linregress
 
-from ornitail.design.geometry import study_tails
+from ornitail.vehicle.geometry import study_tails
 
 
 def geometry_variables(tail_ids: Sequence[str], x_h_m: np.ndarray) -> pd.DataFrame:

@@ -19,9 +19,9 @@ from pathlib import Path
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import read_toml_file
 from ornitail.core.toml_table import TomlTable
-from ornitail.design.geometry import study_tail_geometry
 from ornitail.flight.model_file import load_model
 from ornitail.sim.effects import EFFECT_NAMES
+from ornitail.vehicle.geometry import study_tail_geometry
 
 BASELINE_KINDS = ("simulator", "linear_model")
 

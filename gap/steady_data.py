@@ -9,7 +9,7 @@ Two layouts are recognised by their header:
 
 Either may carry the standard error of each value as ``<column>_sigma`` (same unit); without it
 the channel's :data:`DEFAULT_SIGMA` applies. A frequency column that is empty in every row counts
-as absent. Tails are study tails (design/data/tails.csv; ``AR3`` is read as ``S3``, the same tail).
+as absent. Tails are study tails (vehicle/data/tails.csv; ``AR3`` is read as ``S3``, the same tail).
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ import pandas as pd
 
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import read_csv_table
-from ornitail.design.geometry import study_tails
 from ornitail.gap.table_checks import csv_header, finite_column
+from ornitail.vehicle.geometry import study_tails
 
 CHANNELS = ("theta_ss", "v_ss", "f_ss")
 CHANNEL_UNITS = ("rad", "m/s", "Hz")

@@ -9,8 +9,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ornitail.core.errors import UserInputError
-from ornitail.design.geometry import TailGeometry, study_tail_geometry
 from ornitail.sim.parameters import VehicleParameters
+from ornitail.vehicle.geometry import TailGeometry, study_tail_geometry
 
 
 @dataclass(frozen=True)

@@ -18,11 +18,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import root
 
-from ornitail.core.constants import STANDARD_GRAVITY_M_S2
 from ornitail.sim.configuration import VehicleConfiguration
 from ornitail.sim.effects import EffectSet
 from ornitail.sim.model import PreparedVehicle
 from ornitail.sim.motor import load_factor, throttle_for_frequency
+from ornitail.vehicle.constants import STANDARD_GRAVITY_M_S2
 
 STATE_NAMES = ("q", "u", "w", "theta")
 DERIVATIVE_NAMES = ("Mq", "Mu", "Mw", "Xq", "Xu", "Xw", "Zq", "Zu", "Zw", "Mde", "Xde", "Zde")

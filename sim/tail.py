@@ -29,8 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ornitail.design.geometry import TailGeometry
 from ornitail.sim.parameters import AIR_DENSITY_KG_M3, VehicleParameters
+from ornitail.vehicle.geometry import TailGeometry
 
 
 def helmbold_lift_slope(aspect_ratio: float) -> float:

@@ -19,7 +19,6 @@ import numpy as np
 import pandas as pd
 from scipy.signal import lfilter
 
-from ornitail.core.constants import DELFLY_GEAR_RATIO, STANDARD_GRAVITY_M_S2
 from ornitail.core.errors import UserInputError, require_finite
 from ornitail.sim.configuration import VehicleConfiguration, default_configuration
 from ornitail.sim.effects import EffectSet
@@ -33,6 +32,7 @@ from ornitail.sim.instruments import (
 )
 from ornitail.sim.model import PreparedVehicle
 from ornitail.sim.wings import periodic_wing_loads
+from ornitail.vehicle.constants import DELFLY_GEAR_RATIO, STANDARD_GRAVITY_M_S2
 
 CHANNELS: tuple[str, ...] = (
     "gauge_0_v",

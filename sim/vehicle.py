@@ -14,9 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ornitail.design.geometry import TailGeometry
 from ornitail.sim.configuration import VehicleConfiguration
 from ornitail.sim.effects import EffectSet
+from ornitail.vehicle.geometry import TailGeometry
 
 
 @dataclass(frozen=True)

@@ -9,10 +9,10 @@ from ornitail.balance.cycle_averages import segment_sums
 from ornitail.balance.phase_loads import phase_averaged_loads
 from ornitail.balance.point_loads import cycle_averaged_loads, tare_volts_and_covariance
 from ornitail.balance.sweep_table import frequency_check_warnings, frequency_cross_check_record
-from ornitail.core.constants import DELFLY_GEAR_RATIO
 from ornitail.core.errors import UserInputError
 from ornitail.sim.effects import EffectSet
 from ornitail.sim.tunnel import TunnelSignalSource
+from ornitail.vehicle.constants import DELFLY_GEAR_RATIO
 
 SAMPLE_RATE_HZ = 10_000.0
 PITCH_RAD, VELOCITY_M_S, FREQUENCY_HZ = math.radians(25.0), 0.8, 13.5

@@ -12,8 +12,8 @@ from ornitail.calibration.flapping_frequency_check import (
 )
 from ornitail.calibration.thermocouple_amplifier import temperature_k_from_amplifier_voltage
 from ornitail.calibration.tunnel_table import TunnelVelocityTable
-from ornitail.core.constants import DELFLY_GEAR_RATIO
 from ornitail.core.errors import UserInputError
+from ornitail.vehicle.constants import DELFLY_GEAR_RATIO
 
 
 def write_table(tmp_path, rows: str):

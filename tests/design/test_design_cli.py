@@ -13,8 +13,8 @@ from click.testing import CliRunner
 
 from ornitail.core.errors import UserInputError
 from ornitail.design.cli import design_group
-from ornitail.design.geometry import study_tails
 from ornitail.design.mass_model import pitch_inertia_kg_m2, vehicle_mass_kg
+from ornitail.vehicle.geometry import study_tails
 
 HEXAGON_TAILS = {name: tail for name, tail in study_tails().items() if name != "T2"}
 

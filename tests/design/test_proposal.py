@@ -19,7 +19,6 @@ from ornitail.core.cli import main
 from ornitail.design.cli import design_group
 from ornitail.design.design_evaluation import MassInertiaModel, evaluate_design
 from ornitail.design.drawing import CUT_FILE_MARGIN_MM, cut_file_svg
-from ornitail.design.geometry import TailGeometry, study_tails
 from ornitail.design.linear_model import a_matrix, characteristic_polynomial, modal_summary
 from ornitail.design.proposal import (
     DesignTargets,
@@ -32,6 +31,7 @@ from ornitail.design.proposal import (
 )
 from ornitail.design.trend_data import TrendObservation
 from ornitail.design.trends import fit_trends
+from ornitail.vehicle.geometry import TailGeometry, study_tails
 
 MASS_KG = 0.0235
 IYY_KG_M2 = 1.5e-4
@@ -103,7 +103,7 @@ def test_a_matrix_reproduces_the_simulator_linearisation() -> None:
     matrix = a_matrix(
         model.derivatives, model.mass_kg, model.iyy_kg_m2, trim.theta_rad, trim.airspeed_m_s
     )
-    # same formula, same gravity (core/constants.py), same numbers (round-off only; the trim angle is carried
+    # same formula, same gravity (vehicle/constants.py), same numbers (round-off only; the trim angle is carried
     # through sin and cos differently, a few parts in 1e9)
     assert np.allclose(matrix, model.a_matrix, rtol=1e-8, atol=1e-12)
 

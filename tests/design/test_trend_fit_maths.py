@@ -10,10 +10,10 @@ import pytest
 from scipy import stats
 
 from ornitail.core.errors import UserInputError
-from ornitail.design.geometry import study_tails
 from ornitail.design.trend_basis import BASES
 from ornitail.design.trend_data import TrendObservation
 from ornitail.design.trends import fit_quantity_trend, fit_trends, leave_one_out_predictions
+from ornitail.vehicle.geometry import study_tails
 
 TAILS = study_tails()
 

@@ -6,11 +6,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ornitail.core.constants import STANDARD_GRAVITY_M_S2
 from ornitail.core.errors import UserInputError
 from ornitail.flight.model_file import PRESET_DIRECTORY, load_model, preset_names
 from ornitail.sim.configuration import study_configuration
 from ornitail.sim.dynamics import linearise
+from ornitail.vehicle.constants import STANDARD_GRAVITY_M_S2
 
 MINIMAL = """
 [model]

@@ -7,7 +7,6 @@ import dataclasses
 import numpy as np
 import pytest
 
-from ornitail.design.geometry import TailGeometry
 from ornitail.sim.configuration import VehicleConfiguration, study_configuration
 from ornitail.sim.dynamics import linearise, trim
 from ornitail.sim.effects import EFFECT_NAMES, EffectSet
@@ -15,6 +14,7 @@ from ornitail.sim.instruments import balance_calibration_matrix_si
 from ornitail.sim.model import PreparedVehicle
 from ornitail.sim.tunnel import TunnelSignalSource, true_cycle_average
 from ornitail.sim.vehicle import mass_properties
+from ornitail.vehicle.geometry import TailGeometry
 
 S3_98 = study_configuration("S3", 98)
 ALL = EffectSet.all_on()

@@ -7,7 +7,6 @@ import math
 import numpy as np
 import pytest
 
-from ornitail.core.constants import DELFLY_GEAR_RATIO, STANDARD_GRAVITY_M_S2
 from ornitail.core.errors import UserInputError
 from ornitail.sim.configuration import study_configuration
 from ornitail.sim.effects import EffectSet
@@ -18,6 +17,7 @@ from ornitail.sim.tunnel import (
     record_tunnel_point,
     true_cycle_average,
 )
+from ornitail.vehicle.constants import DELFLY_GEAR_RATIO, STANDARD_GRAVITY_M_S2
 
 MATRIX = balance_calibration_matrix_si()
 CONFIGURATION = study_configuration("S3", 98)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from ornitail.core.errors import UserInputError
-from ornitail.design.geometry import TailGeometry, study_tail_geometry, study_tails
+from ornitail.vehicle.geometry import TailGeometry, study_tail_geometry, study_tails
 
 STUDY_TAILS = study_tails()
 

@@ -26,14 +26,13 @@ root leading edge (T3, the tightest study tail, has 3.3 mm there).
 
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass
-from importlib import resources
 
 import numpy as np
 
 from ornitail.core.errors import UserInputError
+from ornitail.vehicle.study_tables import STUDY_FUSELAGES_TABLE, STUDY_TAILS_TABLE, study_table_rows
 
 BASE_TAIL_SPAN_M = 0.080
 BASE_TAIL_CHORD_M = 0.048
@@ -201,11 +200,9 @@ class StudyTail:
 
 
 def study_tails() -> dict[str, StudyTail]:
-    """The 14 study tails (package data ``design/data/tails.csv``) keyed by name (``"S3"``)."""
-    text = resources.files("ornitail.design").joinpath("data/tails.csv").read_text()
-    rows = csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))
+    """The 14 study tails (package data ``vehicle/data/tails.csv``) keyed by name (``"S3"``)."""
     tails: dict[str, StudyTail] = {}
-    for row in rows:
+    for row in study_table_rows(STUDY_TAILS_TABLE):
         geometry = TailGeometry.from_mm(
             float(row["b_mm"]),
             float(row["b_le_mm"]) if row["b_le_mm"] else None,
@@ -222,10 +219,9 @@ def study_tails() -> dict[str, StudyTail]:
 
 
 def study_fuselages_x_h_m() -> dict[str, float]:
-    """The study's fuselages (package data ``design/data/fuselages.csv``, Table 1): letter -> tail position x_h
+    """The study's fuselages (package data ``vehicle/data/fuselages.csv``, Table 1): letter -> tail position x_h
     (m), in the table's order."""
-    text = resources.files("ornitail.design").joinpath("data/fuselages.csv").read_text()
-    rows = csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))
+    rows = study_table_rows(STUDY_FUSELAGES_TABLE)
     return {row["fuselage"]: float(row["x_h_mm"]) * 1e-3 for row in rows}
 
 
