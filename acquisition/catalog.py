@@ -211,11 +211,11 @@ class RunFilter:
         """Raise :class:`UserInputError` for an unknown status, a non-finite x_h or a naive time."""
         if self.exit_status is not None and self.exit_status not in ALL_EXIT_STATUSES:
             raise UserInputError(
-                "--status",
+                "exit_status",
                 f"{self.exit_status!r} is not one of {', '.join(ALL_EXIT_STATUSES)}",
             )
         if self.x_h_m is not None and not math.isfinite(self.x_h_m):
-            raise UserInputError("--x-h-mm", f"value {self.x_h_m * 1e3!r} is not a finite number")
+            raise UserInputError("x_h_mm", f"value {self.x_h_m * 1e3!r} is not a finite number")
         if self.started_since_utc is not None and self.started_since_utc.tzinfo is None:
             raise ValueError("started_since_utc must be timezone-aware")
 

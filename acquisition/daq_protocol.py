@@ -15,21 +15,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ornitail.acquisition.crc16 import crc16_ccitt_false_rows
+from ornitail.calibration.signal_channels import TUNNEL_SIGNAL_CHANNELS
 
 SYNC_WORD = b"\xa5\x5a"
 FRAME_LENGTH_BYTES = 25
 ANALOG_CHANNEL_COUNT = 8
-CHANNEL_NAMES = (
-    "gauge_0_v",
-    "gauge_1_v",
-    "gauge_2_v",
-    "gauge_3_v",
-    "gauge_4_v",
-    "gauge_5_v",
-    "hotwire_bridge_v",
-    "thermocouple_v",
-    "hall_v",
-)
+CHANNEL_NAMES = TUNNEL_SIGNAL_CHANNELS
 STATUS_BIT_HALL = 0x01
 STATUS_BIT_OVERRANGE = 0x02
 ADC_COUNT_MIN = -32768

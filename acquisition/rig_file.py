@@ -18,7 +18,7 @@ from ornitail.acquisition.netcanoem_protocol import DEFAULT_BASE_ID, gauge_sampl
 from ornitail.calibration.tool_transform import ToolTransform
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import read_toml_file
-from ornitail.core.toml_table import TomlTable
+from ornitail.core.toml_table import REQUIRED, TomlTable
 from ornitail.vehicle.constants import DELFLY_GEAR_RATIO
 
 DEFAULT_RIG_FILE = Path(__file__).parent / "data" / "simulated_rig.toml"
@@ -146,13 +146,13 @@ def read_rig_file(path: str | Path) -> RigDescription:
     can = _fields(path, "balance.can", balance.table.get("can", {}))
     needs_daq = route == "serial_daq"
     serial_daq = SerialDaqSettings(
-        port=daq.text("port", "simulated" if simulated or not needs_daq else None),
+        port=daq.text("port", "simulated" if simulated or not needs_daq else REQUIRED),
         baud=daq.integer("baud", DEFAULT_BAUD, minimum=MIN_BAUD, maximum=MAX_BAUD),
         sample_rate_hz=daq.number("sample_rate_hz", 10_000.0, positive=True),
     )
     can_settings = CanSettings(
-        interface=can.text("interface", "virtual" if simulated or needs_daq else None),
-        channel=can.text("channel", "ornitail-rig" if simulated or needs_daq else None),
+        interface=can.text("interface", "virtual" if simulated or needs_daq else REQUIRED),
+        channel=can.text("channel", "ornitail-rig" if simulated or needs_daq else REQUIRED),
         bit_rate=can.integer("bit_rate", 1_000_000, minimum=10_000, maximum=2_000_000),
         base_id=can.integer("base_id", DEFAULT_BASE_ID, minimum=0, maximum=0x7F),
         sample_rate_hz=can.number("sample_rate_hz", 1000.0, positive=True),
@@ -178,7 +178,7 @@ def read_rig_file(path: str | Path) -> RigDescription:
 
     def line_port(fields: TomlTable) -> LinePortSettings:
         return LinePortSettings(
-            port=fields.text("port", "simulated" if simulated else None),
+            port=fields.text("port", "simulated" if simulated else REQUIRED),
             baud=fields.integer("baud", DEFAULT_LINE_BAUD, minimum=MIN_BAUD, maximum=MAX_BAUD),
         )
 

@@ -621,7 +621,7 @@ def _run_tail_state(
             ]
             if lossy:
                 recorder.mark_incomplete(
-                    "; ".join(lossy) + "; `ornitail sweep --resume` records these points again"
+                    "; ".join(lossy) + "; resuming the sweep records these points again"
                 )
         finally:
             stream.detach()
@@ -643,7 +643,7 @@ def _warn_about_record(context: _SweepContext, point: SetPoint, record: SetPoint
             point,
             f"warning: set point {point.label}: {record.samples_missing_in_record} of {rows} samples still "
             f"lost inside the record after {MAX_RETAKES} retakes; the run ends incomplete and "
-            "`ornitail sweep --resume` records the point again",
+            "resuming the sweep records the point again",
         )
 
 
@@ -741,7 +741,7 @@ def run_sweep(
         result.message = (
             f"recorded {result.completed_points} of {result.total_points} set points; "
             + "; ".join(context.lossy_points[index] for index in result.incomplete_points)
-            + "; run the sweep again with --resume to record them"
+            + "; resume the sweep to record them"
         )
     elif result.status == "completed":
         result.message = f"recorded {result.completed_points} of {result.total_points} set points"

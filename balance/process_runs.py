@@ -67,7 +67,7 @@ def newest_sweep_chain(data_root: Path, plan_name: str) -> list[Path]:
     runs = [run for run in catalog.runs_reconciled()[0] if run.plan_name == plan_name]
     if not runs:
         raise UserInputError(
-            "--plan", f"no runs of plan {plan_name!r} in the catalog of {Path(data_root)}"
+            "plan_name", f"no runs of plan {plan_name!r} in the catalog of {Path(data_root)}"
         )
     newest = max(runs, key=lambda run: run.start_time_utc)
     return previous_sweep_chain(
@@ -169,9 +169,9 @@ def _process_configuration(
     flagged = int((table[list(SATURATION_COLUMNS)] > 0).any(axis=1).sum())
     if flagged:
         record.setdefault("tail_statements", []).append(
-            f"FLAGGED: {flagged} set point(s) of {name} were kept with saturated or over-range samples "
-            "(--keep-saturated); their loads, and the contribution and derivatives computed from them, are "
-            "clipped, not measured."
+            f"FLAGGED: {flagged} set point(s) of {name} were kept, on request, with saturated or over-range "
+            "samples; their loads, and the contribution and derivatives computed from them, are clipped, not "
+            "measured."
         )
     record["written"] = [str(path) for path in written]
     return record
@@ -209,7 +209,8 @@ def process_runs(
     """
     if not run_directories:
         raise UserInputError(
-            "runs", "no run directories given (pass run directories or --plan NAME)"
+            "runs",
+            "no run directories given (name run directories or a plan whose newest sweep to take)",
         )
     points = measured_set_points(run_directories, keep_saturated, calibration_sources)
     if not points:

@@ -281,7 +281,7 @@ def _refuse_flagged(point: _RecordedPoint) -> None:
         f"{record.last_sample_index - record.first_sample_index + 1} samples saturated (a channel at the "
         f"ADC limit or the board's over-range flag) and {record.over_range_samples or 0} over the sensor's "
         f"rated load in the {record.kind}'s record; its loads are clipped: record it again within range, or "
-        "pass --keep-saturated to process it flagged",
+        "process it with saturated records kept, flagged",
     )
 
 

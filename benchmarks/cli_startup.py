@@ -1,4 +1,4 @@
-"""Start-up time of the ``ornitail`` command: ``import ornitail.core.cli`` and ``ornitail --help``.
+"""Start-up time of the ``ornitail`` command: ``import ornitail.app.cli`` and ``ornitail --help``.
 
 Each case runs in a fresh subprocess of this venv's Python, ``--runs`` times, interleaved with a baseline
 (``python -c "pass"``: the interpreter's own start-up) so that a machine slowing down during the run slows both.
@@ -21,7 +21,7 @@ CONSOLE_SCRIPT = str(Path(sys.executable).parent / "ornitail")
 """The ``ornitail`` console script installed next to this Python."""
 CASES: dict[str, list[str]] = {
     "baseline: python -c pass": [sys.executable, "-c", "pass"],
-    "import ornitail.core.cli": [sys.executable, "-c", "import ornitail.core.cli"],
+    "import ornitail.app.cli": [sys.executable, "-c", "import ornitail.app.cli"],
     "ornitail --help": [CONSOLE_SCRIPT, "--help"],
     "ornitail process --help": [CONSOLE_SCRIPT, "process", "--help"],
     "ornitail flight --help": [CONSOLE_SCRIPT, "flight", "--help"],

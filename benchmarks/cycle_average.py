@@ -37,9 +37,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ornitail.app.cli_output import emit
 from ornitail.balance.cycle_averages import _cycle_sample_bounds, cycle_means
 from ornitail.balance.hall_cycles import FlapCycles, flap_cycles
-from ornitail.core.output import emit
 
 SAMPLE_RATE_HZ = 10_000.0
 CHANNELS = 9

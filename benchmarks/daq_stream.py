@@ -43,8 +43,8 @@ from ornitail.acquisition.serial_daq_driver import DaqBlock, SerialDaqDriver
 from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
 from ornitail.acquisition.simulated_clock import SimulatedClock
 from ornitail.acquisition.simulated_daq_board import SimulatedDaqBoard
+from ornitail.app.cli_output import emit
 from ornitail.core.errors import UserInputError, require_finite
-from ornitail.core.output import emit
 
 CPU_TARGET_S_PER_S_OF_DATA = 0.2
 DEFAULT_DURATION_S = 30.0

@@ -25,7 +25,7 @@ import numpy as np
 from ornitail.acquisition import netft_protocol as protocol
 from ornitail.acquisition.netft_driver import NetFtDriver
 from ornitail.acquisition.simulated_netft import SimulatedNetFt
-from ornitail.core.output import emit
+from ornitail.app.cli_output import emit
 
 DEFAULT_DURATION_S = 600.0
 DEFAULT_RATE_HZ = protocol.INTERNAL_SAMPLE_RATE_HZ

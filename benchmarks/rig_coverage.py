@@ -4,7 +4,7 @@
 exactly. This one runs what a user runs: the shipped study plan through the real drivers on the simulated rig
 (ptys, the board's protocol, the fan's lag and settle tolerance, the motor's spin-down, the balance's thermal
 drift and every other effect on; ``acquisition/data/simulated_rig.toml`` with ``[rig].seed`` set per run), then
-``ornitail process``'s library call, then the demo's truth comparison (:func:`ornitail.core.demo.truth_comparison`:
+``ornitail process``'s library call, then the demo's truth comparison (:func:`ornitail.app.demo.truth_comparison`:
 the tail's contribution at the condition its repeats were moved to, X0, Z0, M0 and the nine derivatives at the set
 steady state, each against ``ornitail sim tunnel``).
 
@@ -36,8 +36,8 @@ from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, read_rig_file
 from ornitail.acquisition.sweep import run_sweep
 from ornitail.acquisition.sweep_plan import load_plan
+from ornitail.app.demo import truth_comparison
 from ornitail.balance.process_runs import process_runs
-from ornitail.core.demo import truth_comparison
 
 RESUMES = 3
 """A sweep left incomplete (a record lossy through its retakes on a loaded machine) is resumed, as a user would."""

@@ -136,7 +136,7 @@ class ToolTransform:
         return [*(self.displacement_m * 1e3).tolist(), *np.degrees(self.angles_rad()).tolist()]
 
 
-def parse_tool_transform_option(text: str, where: str = "--tool-transform") -> ToolTransform:
+def parse_tool_transform_option(text: str, where: str = "tool_transform") -> ToolTransform:
     """Parse ``"dx,dy,dz,rx,ry,rz"`` (mm and degrees) into a :class:`ToolTransform`."""
     values = parse_comma_separated_numbers(text, 6, where)
     return ToolTransform.from_mm_deg(*values, where=where)

@@ -1,14 +1,10 @@
-"""Printing results: one JSON object with ``--json``, a readable table otherwise."""
+"""Results made printable: plain JSON values (numpy values made plain, NaN and infinity made null)."""
 
 from __future__ import annotations
 
-import json
 import math
 import sys
-from collections.abc import Callable
 from typing import Any
-
-import click
 
 
 def to_jsonable(value: Any) -> Any:
@@ -26,20 +22,3 @@ def to_jsonable(value: Any) -> Any:
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
-
-
-def emit(
-    result: dict[str, Any], as_json: bool, render_text: Callable[[dict[str, Any]], str]
-) -> None:
-    """Print ``result`` as exactly one JSON object (``as_json``) or as the text ``render_text`` makes."""
-    if as_json:
-        click.echo(json.dumps(to_jsonable(result)))
-    else:
-        click.echo(render_text(result))
-
-
-def json_option(function: Callable) -> Callable:
-    """Add the ``--json`` flag every number-printing command carries."""
-    return click.option(
-        "--json", "as_json", is_flag=True, help="Print exactly one JSON object on stdout."
-    )(function)

@@ -16,6 +16,18 @@ from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import check_input_file
 
 
+class _Required:
+    """The default of a key that must be present (``None`` is a default like any other)."""
+
+    def __repr__(self) -> str:
+        return "REQUIRED"
+
+
+REQUIRED: Any = _Required()
+"""Default of :class:`TomlTable`'s getters: the key must be present. Pass ``default=None`` for an optional key
+that reads as None when absent."""
+
+
 def is_finite_number(value: Any) -> bool:
     """True for an int or float (not a bool) that is finite."""
     return not isinstance(value, bool) and isinstance(value, int | float) and math.isfinite(value)
@@ -56,16 +68,22 @@ class TomlTable:
         """``"<file>: [<section>].<key>"``, the place named in messages."""
         return f"{self.path}: [{self.section}].{key}"
 
-    def get(self, key: str, default: Any = None) -> Any:
-        """The raw value; a missing key without a default is refused."""
+    def get(self, key: str, default: Any = REQUIRED) -> Any:
+        """The raw value; a missing key is refused unless a default (None included) is given."""
         if key not in self.table:
-            if default is None:
+            if default is REQUIRED:
                 raise UserInputError(self.where(key), "required key is missing")
             return default
         return self.table[key]
 
-    def text(self, key: str, default: str | None = None, choices: Iterable[str] = ()) -> str:
-        """A non-empty string, one of ``choices`` when given."""
+    def _absent(self, key: str, default: Any) -> bool:
+        """True when ``key`` is missing and its default is None: an optional key a getter returns as None."""
+        return key not in self.table and default is None
+
+    def text(self, key: str, default: Any = REQUIRED, choices: Iterable[str] = ()) -> Any:
+        """A non-empty string, one of ``choices`` when given (None for an absent key whose default is None)."""
+        if self._absent(key, default):
+            return None
         value = self.get(key, default)
         if not isinstance(value, str) or not value.strip():
             raise UserInputError(self.where(key), f"{value!r} must be a non-empty string")
@@ -74,8 +92,10 @@ class TomlTable:
             raise UserInputError(self.where(key), f"{value!r} must be one of {', '.join(choices)}")
         return value
 
-    def boolean(self, key: str, default: bool | None = None) -> bool:
-        """``true`` or ``false``."""
+    def boolean(self, key: str, default: Any = REQUIRED) -> Any:
+        """``true`` or ``false`` (None for an absent key whose default is None)."""
+        if self._absent(key, default):
+            return None
         value = self.get(key, default)
         if not isinstance(value, bool):
             raise UserInputError(self.where(key), f"{value!r} must be true or false")
@@ -84,12 +104,14 @@ class TomlTable:
     def number(
         self,
         key: str,
-        default: float | None = None,
+        default: Any = REQUIRED,
         *,
         minimum: float | None = None,
         positive: bool = False,
-    ) -> float:
-        """A finite number, optionally > 0 or >= ``minimum``."""
+    ) -> Any:
+        """A finite number, optionally > 0 or >= ``minimum`` (None for an absent key whose default is None)."""
+        if self._absent(key, default):
+            return None
         value = self.get(key, default)
         if not is_finite_number(value):
             raise UserInputError(self.where(key), f"{value!r} must be a finite number")
@@ -100,9 +122,11 @@ class TomlTable:
         return float(value)
 
     def integer(
-        self, key: str, default: int | None = None, *, minimum: int = 0, maximum: int | None = None
-    ) -> int:
-        """A whole number in ``minimum..maximum``."""
+        self, key: str, default: Any = REQUIRED, *, minimum: int = 0, maximum: int | None = None
+    ) -> Any:
+        """A whole number in ``minimum..maximum`` (None for an absent key whose default is None)."""
+        if self._absent(key, default):
+            return None
         value = self.get(key, default)
         if isinstance(value, bool) or not isinstance(value, int):
             raise UserInputError(self.where(key), f"{value!r} must be a whole number")
@@ -112,10 +136,11 @@ class TomlTable:
             raise UserInputError(self.where(key), f"{value} must be in {minimum}..{maximum}")
         return value
 
-    def numbers(
-        self, key: str, count: int, meaning: str, default: list[float] | None = None
-    ) -> list[float]:
-        """A list of exactly ``count`` finite numbers; ``meaning`` describes them in the message."""
+    def numbers(self, key: str, count: int, meaning: str, default: Any = REQUIRED) -> Any:
+        """A list of exactly ``count`` finite numbers; ``meaning`` describes them in the message (None for an
+        absent key whose default is None)."""
+        if self._absent(key, default):
+            return None
         value = self.get(key, default)
         if (
             not isinstance(value, list)

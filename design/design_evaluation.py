@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.normal_quantiles import NORMAL_QUANTILE_95
 from ornitail.design.linear_model import (
     A_MATRIX_DERIVATIVES,
     ModalSummary,
@@ -37,7 +38,6 @@ from ornitail.vehicle.geometry import TailGeometry
 STEADY_STATE_QUANTITIES = ("theta_ss_rad", "v_ss_m_s", "f_ss_hz")
 MASS_QUANTITIES = ("mass_kg", "iyy_kg_m2")
 A_MODEL_QUANTITIES = (*A_MATRIX_DERIVATIVES, "theta_ss_rad", "v_ss_m_s", *MASS_QUANTITIES)
-INTERVAL_Z_95 = 1.959963984540054
 
 
 @dataclass(frozen=True)
@@ -145,7 +145,7 @@ class IntervalEstimate:
     def interval_95(self, kind: str) -> tuple[float, float]:
         """Two-sided 95 % interval, ``kind`` "mean" (mean trend) or "new" (a new flight)."""
         sigma = self.sigma_mean if kind == "mean" else self.sigma_new
-        return (self.value - INTERVAL_Z_95 * sigma, self.value + INTERVAL_Z_95 * sigma)
+        return (self.value - NORMAL_QUANTILE_95 * sigma, self.value + NORMAL_QUANTILE_95 * sigma)
 
 
 @dataclass(frozen=True)

@@ -83,9 +83,9 @@ def pareto_front(
 ) -> list[ParetoPoint]:
     """The ``kind`` front at tail position ``x_h_m`` (m) with ``point_count`` epsilon values."""
     if kind not in FRONT_KINDS:
-        raise UserInputError("--kind", f"unknown front {kind!r}; choose {', '.join(FRONT_KINDS)}")
+        raise UserInputError("kind", f"unknown front {kind!r}; choose {', '.join(FRONT_KINDS)}")
     if not 2 <= point_count <= 50:
-        raise UserInputError("--points", f"value {point_count!r} must be between 2 and 50")
+        raise UserInputError("point_count", f"value {point_count!r} must be between 2 and 50")
     x_h_range = (x_h_m, x_h_m)
     starts = sobol_start_points(problem.bounds, start_count, x_h_range)
     base = SolveSettings(targets, "min-area", x_h_range_m=x_h_range)

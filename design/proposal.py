@@ -66,6 +66,8 @@ FUSELAGE_X_H_M = dict(sorted(study_fuselages_x_h_m().items(), key=lambda item: i
 """The study's fuselages (``vehicle/data/fuselages.csv``): tail position x_h in metres, shortest first."""
 OBJECTIVES = ("min-area", "max-damping", "closest")
 INTERVAL_KINDS = ("mean", "new")
+MAX_STARTS = 256
+"""Most optimiser starts per tail position."""
 TARGET_NAMES = ("theta_ss", "v_ss", "f_ss", "damping_ratio", "natural_frequency")
 TARGET_SOFT_UNITS = (math.radians(1.0), 0.02, 0.1, 0.02, 0.2)
 """Units of the target slacks and of the 'closest' objective: 1 deg, 0.02 m/s, 0.1 Hz, 0.02, 0.2 rad/s."""
@@ -549,12 +551,12 @@ class ProposalProblem:
         """Run IPOPT once from ``start_vector_m`` (b, b_LE, c_r, c_t, x_h in metres)."""
         if settings.objective not in OBJECTIVES:
             raise UserInputError(
-                "--objective",
+                "objective",
                 f"unknown objective {settings.objective!r}; choose one of {', '.join(OBJECTIVES)}",
             )
         if settings.interval_kind not in INTERVAL_KINDS:
             raise UserInputError(
-                "--robust-interval",
+                "robust_interval",
                 f"unknown interval {settings.interval_kind!r}; choose mean or new",
             )
         nlp = self._nlp_for(robust=settings.robust_k > 0)
@@ -565,7 +567,7 @@ class ProposalProblem:
             upper.append(_OPEN_BAND if band is None else min(band.upper / unit, _OPEN_BAND))
         if settings.targets.f_ss_hz is not None and not self._has_frequency_trend:
             raise UserInputError(
-                "--f-ss-hz", "the trend data has no flapping-frequency trend (f_ss_hz)"
+                "f_ss_hz", "the trend data has no flapping-frequency trend (f_ss_hz)"
             )
         opti.set_value(nlp.target_lower, lower)
         opti.set_value(nlp.target_upper, upper)
@@ -737,9 +739,11 @@ def propose(
     """
     began = time.perf_counter()
     if robust_k < 0 or not math.isfinite(robust_k):
-        raise UserInputError("--robust-k", f"value {robust_k!r} must be a finite number >= 0")
+        raise UserInputError("robust_k", f"value {robust_k!r} must be a finite number >= 0")
     if not 1 <= start_count <= 256:
-        raise UserInputError("--starts", f"value {start_count!r} must be between 1 and 256")
+        raise UserInputError(
+            "start_count", f"value {start_count!r} must be between 1 and {MAX_STARTS}"
+        )
     problem = problem or ProposalProblem(trend_model, bounds, mass_inertia)
     bounds = problem.bounds
     if continuous_x_h:
@@ -747,7 +751,7 @@ def propose(
     elif x_h_m is not None:
         if not (math.isfinite(x_h_m) and bounds.x_h_m[0] - 1e-9 <= x_h_m <= bounds.x_h_m[1] + 1e-9):
             raise UserInputError(
-                "--x-h-mm",
+                "x_h_mm",
                 f"value {x_h_m * 1e3!r} mm is outside {bounds.x_h_m[0] * 1e3:g}-{bounds.x_h_m[1] * 1e3:g} mm",
             )
         ranges = [(x_h_m, x_h_m)]
@@ -791,7 +795,7 @@ def propose(
                 "targets",
                 f"none of {tried} IPOPT runs found a tail within the bounds with an oscillatory "
                 "pitch mode and real poles decaying faster than "
-                f"{bounds.real_pole_decay_1_s:g} 1/s under these trends (try more --starts)",
+                f"{bounds.real_pole_decay_1_s:g} 1/s under these trends (try more starts)",
             )
         status = (
             "targets met" if not best.target_violations else "nearest achievable (targets not met)"

@@ -115,7 +115,7 @@ BASES: dict[str, TrendBasis] = {
 """The selectable bases by name."""
 
 
-def trend_basis(name: str | TrendBasis, where: str = "--basis") -> TrendBasis:
+def trend_basis(name: str | TrendBasis, where: str = "basis") -> TrendBasis:
     """The basis called ``name`` (a :class:`TrendBasis` passes through); unknown names are refused."""
     if isinstance(name, TrendBasis):
         return name

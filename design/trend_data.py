@@ -27,7 +27,12 @@ from typing import Any
 
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import read_input_text, read_json_file
-from ornitail.vehicle.geometry import TailGeometry, study_fuselages_x_h_m, study_tails
+from ornitail.vehicle.geometry import (
+    TailGeometry,
+    require_tail_position_mm,
+    study_fuselages_x_h_m,
+    study_tails,
+)
 from ornitail.vehicle.study_tables import (
     STUDY_SIGN_FLIPPED_DERIVATIVES,
     STUDY_TABLE_3,
@@ -401,8 +406,7 @@ def observations_from_user_csv(path: Path | str) -> list[TrendObservation]:
             )
         tail_id = row["tail"].strip()
         x_h_mm = _x_h_m_from(row["x_h_mm"], f"{where}: x_h_mm")
-        if not 20.0 <= x_h_mm <= 300.0:
-            raise UserInputError(f"{where}: x_h_mm", f"{x_h_mm:g} mm is outside 20-300 mm")
+        require_tail_position_mm(f"{where}: x_h_mm", x_h_mm)
         value = _number_or_missing(row["value"], f"{where}: value")
         if value is None:
             raise UserInputError(f"{where}: value", "missing")

@@ -146,8 +146,7 @@ def logged_configuration_data(
     if configuration.mass_kg is None or configuration.iyy_kg_m2 is None:
         raise UserInputError(
             configuration.label,
-            "flight logs need the vehicle's mass_kg and iyy_kg_m2 (campaign file, or --mass-kg "
-            "and --iyy-kg-m2)",
+            "flight logs need the vehicle's mass_kg and iyy_kg_m2 (in the campaign file or given with the logs)",
         )
     manoeuvres: list[Manoeuvre] = []
     for source in configuration.logs:

@@ -23,7 +23,7 @@ from ornitail.core.input_files import read_toml_file
 from ornitail.flight.manoeuvres import DEFAULT_GLITCH_RULE, GLITCH_RULES
 from ornitail.flight.model_file import INPUT_HOLDS
 from ornitail.flight.validation import DEFAULT_SELECTION_RULE, SELECTION_RULES
-from ornitail.vehicle.geometry import TailGeometry, study_tails
+from ornitail.vehicle.geometry import TailGeometry, require_tail_position_mm, study_tails
 
 CONFIGURATION_LABEL = re.compile(r"^(?P<tail>[A-Za-z][A-Za-z0-9_]*)@(?P<x_h_mm>[0-9.]+)$")
 DEFAULT_SIMULATED_MANOEUVRES = 21
@@ -90,8 +90,7 @@ def parse_configuration_label(label: str, where: str) -> tuple[str, float]:
     if not match:
         raise UserInputError(where, f"{label!r} is not TAIL@X_H_MM (e.g. S3@98)")
     x_h_mm = float(match.group("x_h_mm"))
-    if not 20.0 <= x_h_mm <= 300.0:
-        raise UserInputError(where, f"x_h {x_h_mm:g} mm is outside 20-300 mm")
+    require_tail_position_mm(where, x_h_mm)
     return match.group("tail"), x_h_mm / 1000.0
 
 
@@ -214,8 +213,7 @@ def _configuration_from_table(table: Any, where: str, base: Path) -> Configurati
     if not isinstance(tail, str) or not tail:
         raise UserInputError(f"{where}.tail", 'must name the tail (e.g. "S3")')
     x_h_mm = _number(table, "x_h_mm", where)
-    if not 20.0 <= x_h_mm <= 300.0:
-        raise UserInputError(f"{where}.x_h_mm", f"{x_h_mm:g} mm is outside 20-300 mm")
+    require_tail_position_mm(f"{where}.x_h_mm", x_h_mm)
     planform = table.get("planform")
     if planform is not None and not isinstance(planform, dict):
         raise UserInputError(

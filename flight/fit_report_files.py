@@ -52,10 +52,10 @@ def prepare_directory(directory: Path) -> None:
         directory.mkdir(parents=True, exist_ok=True)
     except OSError as error:
         raise UserInputError(
-            f"--out {directory}", f"cannot create the folder ({error.strerror or error})"
+            f"{directory}", f"cannot create the folder ({error.strerror or error})"
         ) from None
     if not os.access(directory, os.W_OK):
-        raise UserInputError(f"--out {directory}", "the folder is not writable")
+        raise UserInputError(f"{directory}", "the folder is not writable")
 
 
 def _outputs_in_column_units(
@@ -256,6 +256,6 @@ def write_fit_report(
         written[-1].write_text(json.dumps(to_jsonable(document), indent=1))
     except OSError as error:
         raise UserInputError(
-            f"--out {directory}", f"cannot write the report ({error.strerror or error})"
+            f"{directory}", f"cannot write the report ({error.strerror or error})"
         ) from None
     return written

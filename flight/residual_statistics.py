@@ -6,8 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ornitail.core.normal_quantiles import NORMAL_QUANTILE_99
+
 CORRELATION_LAGS = 25  # lags tested, as MATLAB's resid
-CONFIDENCE_Z = 2.576  # 99 % two-sided normal quantile (MATLAB's resid uses 99 %)
+CONFIDENCE_Z = NORMAL_QUANTILE_99  # MATLAB's resid draws 99 % bounds
 
 
 @dataclass(frozen=True)

@@ -90,7 +90,7 @@ def _check_names(effects: dict[str, float], allowed: tuple[str, ...], kind: str)
     unknown = [name for name in effects if name not in allowed]
     if unknown:
         raise UserInputError(
-            "--effect",
+            "effects",
             f"{unknown[0]!r} is not a {kind} example effect; choose from {', '.join(allowed)}",
         )
 
@@ -124,14 +124,14 @@ def write_example(
 ) -> dict[str, object]:
     """Write the example data and baseline file into ``folder``; return their paths."""
     if not math.isfinite(x_h_mm):
-        raise UserInputError("--x-h-mm", f"{x_h_mm!r} is not a finite number")
+        raise UserInputError("x_h_mm", f"{x_h_mm!r} is not a finite number")
     if kind == "flight":
         check_effects({name: 0.0 if value is None else value for name, value in effects.items()})
         for name, value in effects.items():
             limit = MAX_MAGNITUDE_FACTOR * abs(DEFAULT_MAGNITUDES.get(name, 1.0))
             if value is not None and abs(value) > limit:
                 raise UserInputError(
-                    f"--effect {name}",
+                    f"effect {name}",
                     f"magnitude {value:g} is beyond +-{limit:g} ({MAX_MAGNITUDE_FACTOR:g} x the "
                     f"example's {DEFAULT_MAGNITUDES.get(name, 1.0):g})",
                 )

@@ -21,7 +21,7 @@ from ornitail.core.input_files import read_toml_file
 from ornitail.core.toml_table import TomlTable
 from ornitail.flight.model_file import load_model
 from ornitail.sim.effects import EFFECT_NAMES
-from ornitail.vehicle.geometry import study_tail_geometry
+from ornitail.vehicle.geometry import require_tail_position_mm, study_tail_geometry
 
 BASELINE_KINDS = ("simulator", "linear_model")
 
@@ -69,8 +69,7 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
     )
     kind = table.text("kind", choices=BASELINE_KINDS)
     x_h_mm = table.number("x_h_mm", positive=True)
-    if not 20.0 <= x_h_mm <= 300.0:
-        raise UserInputError(table.where("x_h_mm"), f"{x_h_mm:g} mm is outside 20-300 mm")
+    require_tail_position_mm(table.where("x_h_mm"), x_h_mm)
     tail = table.text("tail")
     study_tail_geometry(tail, where=table.where("tail"))
     model = ""

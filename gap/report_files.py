@@ -43,20 +43,20 @@ def diagnose_files(
         if Path(path).is_dir() and not is_run_directory(Path(path)):
             raise UserInputError(
                 str(path),
-                "a folder but not a recorded run (no run.json); give each run directory with --data",
+                "a folder but not a recorded run (no run.json); give each run directory itself",
             )
     tunnel = [is_tunnel_table(path) for path in data_paths]
     steady = [is_steady_table(path) for path in data_paths]
     if any(steady) and len(data_paths) > 1:
         raise UserInputError(
-            "--data", "give one steady-state table alone (one row per configuration)"
+            "data_paths", "give one steady-state table alone (one row per configuration)"
         )
     if any(tunnel) and not all(tunnel):
-        raise UserInputError("--data", "give either flight logs or tunnel tables, not both")
+        raise UserInputError("data_paths", "give either flight logs or tunnel tables, not both")
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as error:
-        raise UserInputError(f"--out {out}", f"cannot create the folder: {error}") from None
+        raise UserInputError(f"{out}", f"cannot create the folder: {error}") from None
     written: list[str] = []
     if any(steady):
         diagnosis = diagnose_steady(spec, data_paths[0], seed)

@@ -64,7 +64,7 @@ class WithheldCase:
         return BaselineSpec("simulator", self.tail, self.x_h_mm, effects_off=SWITCHED_EFFECTS)
 
 
-def check_effects(effects: Mapping[str, float], where: str = "--effect") -> None:
+def check_effects(effects: Mapping[str, float], where: str = "effects") -> None:
     for name, value in effects.items():
         if name not in WITHHELD_EFFECTS:
             raise UserInputError(

@@ -13,8 +13,12 @@ from PySide6 import QtWidgets
 
 from ornitail.design.drawing import base_tail_outline_mm, planform_outline_mm
 from ornitail.design.proposal import OBJECTIVES, Proposal, propose
-from ornitail.design.propose_cli import proposal_result, render_proposal, targets_from_options
-from ornitail.design.trend_sources import trend_model_from_options
+from ornitail.design.proposal_report import (
+    design_targets,
+    proposal_result,
+    render_proposal,
+)
+from ornitail.design.trend_sources import trend_model_from_sources
 from ornitail.gui.background_job import BackgroundJobs
 from ornitail.gui.form_widgets import spin_box
 from ornitail.gui.plot_style import TAILED_COLOR, TAILLESS_COLOR
@@ -25,8 +29,8 @@ def propose_tail(
     targets_args: tuple, objective: str, tunnels: tuple[str, ...]
 ) -> tuple[Proposal, dict]:
     """Fit trends (study tables plus ``tunnels``) and propose a tail; returns the proposal and its summary."""
-    targets = targets_from_options(*targets_args)
-    trend_model = trend_model_from_options(True, (), tunnels, (), "linear")
+    targets = design_targets(*targets_args)
+    trend_model = trend_model_from_sources(True, (), tunnels, (), "linear")
     proposal = propose(trend_model, targets, objective=objective)
     return proposal, proposal_result(proposal, trend_model)
 

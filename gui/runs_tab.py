@@ -14,6 +14,7 @@ from PySide6 import QtWidgets
 from ornitail.acquisition.catalog import CatalogEntry, RunCatalog
 from ornitail.acquisition.recording_reader import load_recording
 from ornitail.balance.process_runs import process_runs
+from ornitail.core.normal_quantiles import NORMAL_QUANTILE_95
 from ornitail.gui.background_job import BackgroundJobs
 
 RUN_COLUMNS = (
@@ -26,7 +27,6 @@ RUN_COLUMNS = (
     "set points",
     "lost samples",
 )
-Z_95 = 1.959963984540054
 
 
 def _catalog_row(run: CatalogEntry) -> tuple[str, ...]:
@@ -54,7 +54,9 @@ def derivative_rows(configuration: dict[str, Any]) -> list[tuple[str, str, str, 
         interval = (
             "-"
             if sigma is None or not math.isfinite(sigma)
-            else (f"[{value - Z_95 * sigma:.4g}, {value + Z_95 * sigma:.4g}]")
+            else (
+                f"[{value - NORMAL_QUANTILE_95 * sigma:.4g}, {value + NORMAL_QUANTILE_95 * sigma:.4g}]"
+            )
         )
         rows.append((name, f"{value:.4g}", interval, item["unit"]))
     return rows

@@ -44,6 +44,6 @@ if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
     echo "setup: pip install failed; the whole log is in $log" >&2
     exit 1
   fi
-  .venv/bin/python -c "import ornitail.core.cli" # fail here, not later, if the install did not work
+  .venv/bin/python -c "import ornitail.app.cli" # fail here, not later, if the install did not work
   touch "$stamp"
 fi

@@ -10,7 +10,7 @@ import numpy as np
 
 from ornitail.core.errors import UserInputError
 from ornitail.sim.parameters import VehicleParameters
-from ornitail.vehicle.geometry import TailGeometry, study_tail_geometry
+from ornitail.vehicle.geometry import TailGeometry, require_tail_position_mm, study_tail_geometry
 
 
 @dataclass(frozen=True)
@@ -69,11 +69,8 @@ class VehicleConfiguration:
 
 def study_configuration(tail_name: str, x_h_mm: float) -> VehicleConfiguration:
     """A study tail (``"S3"``, ``"T2"``, ...) at tail position ``x_h_mm`` (millimetres)."""
-    tail = study_tail_geometry(tail_name, where="--tail")
-    if not math.isfinite(x_h_mm):
-        raise UserInputError("--x-h-mm", f"value {x_h_mm!r} is not a finite number")
-    if not 20.0 <= x_h_mm <= 300.0:
-        raise UserInputError("--x-h-mm", f"tail position {x_h_mm:g} mm is outside 20-300 mm")
+    tail = study_tail_geometry(tail_name, where="tail")
+    require_tail_position_mm("x_h_mm", x_h_mm)
     return VehicleConfiguration(tail=tail, x_h_m=x_h_mm / 1000.0, name=f"{tail_name}@{x_h_mm:g}mm")
 
 

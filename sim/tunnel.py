@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 from scipy.signal import lfilter
 
+from ornitail.calibration.signal_channels import TUNNEL_SIGNAL_CHANNELS
 from ornitail.core.errors import UserInputError, require_finite
 from ornitail.sim.configuration import VehicleConfiguration, default_configuration
 from ornitail.sim.effects import EffectSet
@@ -34,17 +35,7 @@ from ornitail.sim.model import PreparedVehicle
 from ornitail.sim.wings import periodic_wing_loads
 from ornitail.vehicle.constants import DELFLY_GEAR_RATIO, STANDARD_GRAVITY_M_S2
 
-CHANNELS: tuple[str, ...] = (
-    "gauge_0_v",
-    "gauge_1_v",
-    "gauge_2_v",
-    "gauge_3_v",
-    "gauge_4_v",
-    "gauge_5_v",
-    "hotwire_bridge_v",
-    "thermocouple_v",
-    "hall_v",
-)
+CHANNELS = TUNNEL_SIGNAL_CHANNELS
 _FREQUENCY_JITTER_FRACTION = 0.002  # motor speed wander, AR(1) with 0.2 s time constant (estimate)
 _FREQUENCY_JITTER_TIME_S = 0.2
 _RPM_NOISE = 10.0  # rpm, tachometer noise (estimate)

@@ -30,7 +30,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from ornitail.core.cli import main
+from ornitail.app.cli import main
 from ornitail.core.input_files import MAX_INPUT_FILE_BYTES
 
 REPOSITORY = Path(__file__).resolve().parents[1]

@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from ornitail.core.cli import main
+from ornitail.app.cli import main
 
 HEAVY = ("casadi", "matplotlib", "PySide6", "scipy", "pandas")
 COMMANDS = {
@@ -41,7 +41,7 @@ def run_python(code: str, *arguments: str, columns: int = 80) -> subprocess.Comp
 
 def test_importing_the_cli_imports_no_heavy_library():
     completed = run_python(
-        f"import sys, ornitail.core.cli; print(sorted(set(sys.modules) & {set(HEAVY)!r}))"
+        f"import sys, ornitail.app.cli; print(sorted(set(sys.modules) & {set(HEAVY)!r}))"
     )
     assert completed.stdout.strip() == "[]"
 
@@ -63,7 +63,7 @@ def test_importing_the_cli_imports_no_heavy_library():
 def test_help_imports_no_heavy_library(arguments):
     completed = run_python(
         "import sys\n"
-        "from ornitail.core.cli import main\n"
+        "from ornitail.app.cli import main\n"
         "main(sys.argv[1:], prog_name='ornitail', standalone_mode=False)\n"
         f"print(sorted(set(sys.modules) & {set(HEAVY)!r}), file=sys.stderr)\n",
         *arguments,
@@ -78,13 +78,13 @@ def test_help_imports_no_heavy_library(arguments):
 def test_help_lists_every_command_as_the_loaded_commands_describe_themselves(group, columns):
     arguments = [*group.split(), "--help"]
     lazy = run_python(
-        "import sys; from ornitail.core.cli import main; main(sys.argv[1:], prog_name='ornitail')",
+        "import sys; from ornitail.app.cli import main; main(sys.argv[1:], prog_name='ornitail')",
         *arguments,
         columns=columns,
     )
     loaded = run_python(
         "import sys\n"
-        "from ornitail.core.cli import main\n"
+        "from ornitail.app.cli import main\n"
         f"group = main.commands[{group!r}] if {group!r} else main\n"
         "for name in list(group.commands):\n"
         "    group.commands[name]\n"

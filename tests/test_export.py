@@ -21,8 +21,8 @@ from ornitail.acquisition.recording_layout import (
     SetPointRecord,
     StreamLayout,
 )
-from ornitail.core.cli import main
-from ornitail.core.export import unit_from_column_name
+from ornitail.app.cli import main
+from ornitail.app.export import unit_from_column_name
 
 CALIBRATION_FILE = Path(__file__).parent / "data" / "calibration" / "FT8884.cal"
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import io
 import re
 
-from ornitail.core.progress import LINE_INTERVAL_S, PROGRESS_LINE, Progress
+from ornitail.app.progress import LINE_INTERVAL_S, PROGRESS_LINE, Progress
 
 LINE = re.compile(
     r"^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ sweep p: (\d+)/4 set points(, eta \d+ s)?(, .+)?$"

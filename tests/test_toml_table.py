@@ -61,3 +61,35 @@ def test_unknown_keys_and_non_tables_are_refused():
     with pytest.raises(UserInputError, match=r"f.toml: \[t\]: must be a table"):
         TomlTable("f.toml", "t", [1, 2], {"a"})
     assert math.isfinite(TomlTable("f.toml", "t", {"a": 1}, {"a"}).number("a"))
+
+
+@pytest.mark.parametrize(
+    "read",
+    [
+        lambda r: r.get("absent"),
+        lambda r: r.text("absent"),
+        lambda r: r.number("absent"),
+        lambda r: r.integer("absent"),
+        lambda r: r.boolean("absent"),
+        lambda r: r.numbers("absent", 2, "[a, b]"),
+    ],
+)
+def test_a_key_without_default_is_required(read):
+    with pytest.raises(UserInputError, match=r"f\.toml: \[t\]\.absent: required key is missing"):
+        read(table())
+
+
+def test_none_is_a_default_like_any_other():
+    # an optional key reads as None when absent; falsy defaults are defaults too (the old sentinel was None)
+    reader = table()
+    assert reader.get("absent", None) is None
+    assert reader.text("absent", None) is None
+    assert reader.number("absent", None) is None
+    assert reader.integer("absent", None) is None
+    assert reader.boolean("absent", None) is None
+    assert reader.numbers("absent", 2, "[a, b]", None) is None
+    assert reader.number("absent", 0.0) == 0.0
+    assert reader.boolean("absent", False) is False
+    assert reader.number("rate", None) == 10.0  # a present key is read and checked as before
+    with pytest.raises(UserInputError, match="finite"):
+        reader.number("bad", None)

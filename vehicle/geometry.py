@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ornitail.core.errors import UserInputError
+from ornitail.vehicle.constants import TAIL_POSITION_RANGE_MM
 from ornitail.vehicle.study_tables import STUDY_FUSELAGES_TABLE, STUDY_TAILS_TABLE, study_table_rows
 
 BASE_TAIL_SPAN_M = 0.080
@@ -233,3 +234,12 @@ def study_tail_geometry(tail_name: str, where: str = "tail") -> TailGeometry:
             where, f"unknown tail {tail_name!r}; known tails: {', '.join(sorted(tails))}"
         )
     return tails[tail_name].geometry
+
+
+def require_tail_position_mm(where: str, x_h_mm: float) -> None:
+    """Refuse a tail position x_h (mm) that is not finite or lies outside ``TAIL_POSITION_RANGE_MM``."""
+    low, high = TAIL_POSITION_RANGE_MM
+    if not math.isfinite(x_h_mm):
+        raise UserInputError(where, f"value {x_h_mm!r} is not a finite number")
+    if not low <= x_h_mm <= high:
+        raise UserInputError(where, f"tail position {x_h_mm:g} mm is outside {low:g}-{high:g} mm")

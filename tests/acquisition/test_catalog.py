@@ -27,7 +27,7 @@ from ornitail.acquisition.recording_layout import (
     SetPointRecord,
     StreamLayout,
 )
-from ornitail.core.cli import main
+from ornitail.app.cli import main
 from ornitail.core.errors import UserInputError
 
 CALIBRATION_FILE = Path(__file__).parents[1] / "data" / "calibration" / "FT8884.cal"

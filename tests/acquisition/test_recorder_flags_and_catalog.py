@@ -32,7 +32,7 @@ from ornitail.acquisition.recording_layout import (
 )
 from ornitail.acquisition.recording_reader import load_recording
 from ornitail.acquisition.run_files import read_journal
-from ornitail.core.cli import main
+from ornitail.app.cli import main
 
 LAYOUT = StreamLayout([ChannelSpec(f"gauge_{index}", "V") for index in range(6)], 10_000.0)
 CONFIGURATION = RunConfiguration("S3", 0.098, True, "flags")

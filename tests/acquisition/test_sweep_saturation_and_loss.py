@@ -19,10 +19,10 @@ from ornitail.acquisition.catalog import CATALOG_FILE_NAME, RunCatalog
 from ornitail.acquisition.live_balance import LiveBalance
 from ornitail.acquisition.recording_reader import load_recording
 from ornitail.acquisition.sweep import MAX_RETAKES, run_sweep
-from ornitail.acquisition.sweep_cli import EXIT_INCOMPLETE, exit_code_of, sweep_result_record
 from ornitail.acquisition.sweep_plan import plan_from_document
+from ornitail.app.cli import main
+from ornitail.app.sweep_session import EXIT_INCOMPLETE, exit_code_of, sweep_result_record
 from ornitail.balance.sweep_table import cycle_averaged_table
-from ornitail.core.cli import main
 
 SHORT_PLAN = {
     "plan": {"name": "short-faults"},

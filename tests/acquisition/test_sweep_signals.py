@@ -7,15 +7,15 @@ import time
 
 import pytest
 
-from ornitail.acquisition import sweep_cli
 from ornitail.acquisition.sweep import SweepStop
-from ornitail.acquisition.sweep_cli import SweepInterrupted, SweepSignals
+from ornitail.app import sweep_session
+from ornitail.app.sweep_session import SweepInterrupted, SweepSignals
 
 
 @pytest.fixture
 def signals(monkeypatch):
     # SIGHUP points a terminal's stdin/stdout/stderr at /dev/null: not pytest's own terminal
-    monkeypatch.setattr(sweep_cli, "_detach_from_terminal", lambda: None)
+    monkeypatch.setattr(sweep_session, "_detach_from_terminal", lambda: None)
     installed = SweepSignals(SweepStop()).install()
     yield installed
     installed.closing()

@@ -17,8 +17,8 @@ from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE
 from ornitail.acquisition.sweep import run_sweep
 from ornitail.acquisition.sweep_plan import plan_from_document
-from ornitail.core.cli import main
-from ornitail.core.progress import PROGRESS_LINE
+from ornitail.app.cli import main
+from ornitail.app.progress import PROGRESS_LINE
 
 PLAN = {
     "plan": {"name": "portable"},

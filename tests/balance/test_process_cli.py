@@ -13,7 +13,7 @@ from click.testing import CliRunner
 
 from ornitail.acquisition.sweep import run_sweep
 from ornitail.acquisition.sweep_plan import plan_from_document
-from ornitail.core.cli import main
+from ornitail.app.cli import main
 
 SHORT_PLAN = {
     "plan": {"name": "short-process"},

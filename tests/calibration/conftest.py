@@ -19,7 +19,7 @@ def cal_file_path():
 @pytest.fixture
 def run_ornitail():
     """Run ``ornitail <args>`` in-process through the real root group (errors -> exit 2)."""
-    from ornitail.core.cli import main
+    from ornitail.app.cli import main
 
     def run(*arguments: str):
         return CliRunner().invoke(main, [str(argument) for argument in arguments])

@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
+from ornitail.app.commands.design import design_group
 from ornitail.core.errors import UserInputError
-from ornitail.design.cli import design_group
 from ornitail.design.mass_model import pitch_inertia_kg_m2, vehicle_mass_kg
 from ornitail.vehicle.geometry import study_tails
 

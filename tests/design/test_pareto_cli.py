@@ -5,7 +5,7 @@ import json
 import numpy as np
 from click.testing import CliRunner
 
-from ornitail.core.cli import main
+from ornitail.app.cli import main
 
 
 def test_area_damping_front_rises_and_each_point_meets_its_damping_floor(tmp_path):

@@ -15,8 +15,8 @@ import pytest
 from click.testing import CliRunner
 from scipy.optimize import brentq
 
-from ornitail.core.cli import main
-from ornitail.design.cli import design_group
+from ornitail.app.cli import main
+from ornitail.app.commands.design import design_group
 from ornitail.design.design_evaluation import MassInertiaModel, evaluate_design
 from ornitail.design.drawing import CUT_FILE_MARGIN_MM, cut_file_svg
 from ornitail.design.linear_model import a_matrix, characteristic_polynomial, modal_summary

@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
+from ornitail.app.commands.flight_campaign import _campaign_from_options, campaign_command
 from ornitail.core.errors import UserInputError
-from ornitail.flight.campaign_cli import _campaign_from_options, campaign_command
 from ornitail.sim.configuration import study_configuration
 from ornitail.sim.dynamics import linearise
 from ornitail.sim.free_flight import FlightPlan, simulate_flight, write_flight_log_csv

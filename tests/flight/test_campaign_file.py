@@ -53,7 +53,7 @@ def test_campaign_file_is_read_with_paths_relative_to_it(tmp_path: Path):
 @pytest.mark.parametrize(
     ("replace", "by", "message"),
     [
-        ("x_h_mm = 98", "x_h_mm = 980", r"x_h_mm: 980 mm is outside"),
+        ("x_h_mm = 98", "x_h_mm = 980", r"x_h_mm: tail position 980 mm is outside"),
         ('tail = "X1"', 'tail = "Q9"\nplanform_x = 1', r"planform_x: unknown key"),
         ("mass_kg = 0.0235", "mass_kg = -1.0", r"mass_kg: must be positive"),
         ("time_range_s = [10.0, 300.0]", "time_range_s = [300.0, 10.0]", r"is not \[start, end\]"),

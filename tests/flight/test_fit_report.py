@@ -11,8 +11,8 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from ornitail.app.commands.flight import flight_group
 from ornitail.core.errors import UserInputError
-from ornitail.flight.cli import flight_group
 from ornitail.flight.flight_logs import read_flight_log
 from ornitail.flight.identify import identify
 from ornitail.flight.model_data import model_data

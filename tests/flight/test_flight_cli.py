@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
+from ornitail.app.commands.flight import flight_group
 from ornitail.core.errors import UserInputError
-from ornitail.flight.cli import flight_group
 
 CSV_PATH = str(Path(__file__).parents[1] / "data" / "twin-otter" / "twin_otter_020213f1_019.csv")
 

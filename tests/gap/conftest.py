@@ -5,7 +5,7 @@ import json
 import pytest
 from click.testing import CliRunner
 
-from ornitail.core.cli import main
+from ornitail.app.cli import main
 
 
 @pytest.fixture(scope="session")

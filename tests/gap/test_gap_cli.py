@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from ornitail.core.cli import main
+from ornitail.app.cli import main
 
 
 @pytest.fixture(scope="module")
@@ -160,7 +160,7 @@ def test_too_few_manoeuvres_to_fit_choose_and_test_is_one_line(tmp_path):
 
 
 def test_the_example_and_the_benchmark_refuse_fewer_manoeuvres_than_a_diagnosis_needs():
-    from ornitail.gap.cli import gap_group
+    from ornitail.app.commands.gap import gap_group
     from ornitail.gap.flight_data import MINIMUM_MANOEUVRES
 
     for name in ("example", "benchmark"):

@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from ornitail.core.cli import main
+from ornitail.app.cli import main
 from ornitail.gap.example_data import write_steady_example
 from ornitail.gap.model_spec import read_baseline_spec
 from ornitail.gap.steady_diagnosis import diagnose_steady

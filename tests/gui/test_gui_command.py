@@ -2,7 +2,7 @@
 
 from click.testing import CliRunner
 
-from ornitail.core.cli import main
+from ornitail.app.cli import main
 
 
 def test_gui_without_a_display_says_so_in_one_line():

@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from ornitail.core.cli import main
+from ornitail.app.cli import main
 
 
 def _console_script() -> str:

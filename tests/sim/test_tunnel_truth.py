@@ -15,8 +15,8 @@ import pytest
 from click.testing import CliRunner
 
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, read_rig_file
+from ornitail.app.cli import main
 from ornitail.calibration.tool_transform import ToolTransform
-from ornitail.core.cli import main
 from ornitail.sim.configuration import study_configuration
 from ornitail.sim.effects import EffectSet
 from ornitail.sim.tunnel import true_cycle_average

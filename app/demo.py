@@ -5,7 +5,7 @@ tares, the tailed steady state and sweeps, the tailless steady state; then proce
 does (cycle averages, tail contribution, stability derivatives, plots) and prints the steady-state loads with and
 without tail, their 2-sigma spread over cycles, the tail's contribution and the derivatives with their sigma.
 Finally it flies a small simulated campaign, fits trends against tail geometry and proposes a tail
-(:mod:`ornitail.core.demo_design`).
+(:mod:`ornitail.app.demo_design`).
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from ornitail.core.output import emit, json_option
+from ornitail.app.cli_output import emit, json_option
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -222,7 +222,7 @@ def _render(result: dict[str, Any]) -> str:
             f"{targets['theta_ss_deg']:g} +- {targets['theta_tolerance_deg']:g} deg, damping ratio >= "
             f"{targets['damping_ratio_min']:g}, smallest area):"
         )
-        from ornitail.design.propose_cli import render_proposal
+        from ornitail.design.proposal_report import render_proposal
 
         lines.append(render_proposal(design))
     return "\n".join(lines)
@@ -249,7 +249,8 @@ def demo_command(data_root: Path | None, time_scale: float, as_json: bool) -> No
 
     from ornitail.acquisition.catalog import default_data_root
     from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE
-    from ornitail.acquisition.sweep_cli import (
+    from ornitail.app.demo_design import design_from_simulated_campaign
+    from ornitail.app.sweep_session import (
         check_time_scale_option,
         exit_code_of,
         guarded,
@@ -257,7 +258,6 @@ def demo_command(data_root: Path | None, time_scale: float, as_json: bool) -> No
         sweep_result_record,
     )
     from ornitail.balance.process_runs import process_runs
-    from ornitail.core.demo_design import design_from_simulated_campaign
 
     check_time_scale_option(time_scale)
     data_root = data_root or default_data_root()

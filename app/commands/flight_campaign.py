@@ -5,7 +5,7 @@ Input: a campaign file (``--campaign``), flight logs labelled by configuration
 repeatable). ``--selection-rule``, ``--glitch-rule`` and ``--input-hold`` override the campaign
 file's rules (defaults: the study's rules, the model's own input hold). Output:
 ``representative_models.csv`` / ``.json`` and the pictures (PNG and PDF) in ``--out``; progress on
-stderr (``ornitail.core.progress``: a bar in a terminal, timestamped lines in a log); with ``--json`` exactly one
+stderr (``ornitail.app.progress``: a bar in a terminal, timestamped lines in a log); with ``--json`` exactly one
 JSON object on stdout.
 """
 
@@ -18,10 +18,10 @@ from typing import Any
 
 import click
 
+from ornitail.app.cli_output import emit, json_option
+from ornitail.app.progress import Progress
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import check_input_file, prepare_output_directory
-from ornitail.core.output import emit, json_option
-from ornitail.core.progress import Progress
 from ornitail.flight.campaign import run_campaign
 from ornitail.flight.campaign_file import (
     DEFAULT_SEED,

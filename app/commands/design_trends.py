@@ -8,12 +8,14 @@ from typing import Any
 
 import click
 
+from ornitail.app.cli_output import emit, json_option
+from ornitail.app.trend_source_options import trend_source_options
 from ornitail.core.errors import UserInputError, require_finite
 from ornitail.core.input_files import prepare_output_directory
-from ornitail.core.output import emit, json_option, to_jsonable
-from ornitail.design.propose_cli import X_H_RANGE_MM
-from ornitail.design.trend_sources import gather_observations, trend_source_options
+from ornitail.core.output import to_jsonable
+from ornitail.design.trend_sources import gather_observations
 from ornitail.design.trends import fit_trends
+from ornitail.vehicle.constants import TAIL_POSITION_RANGE_MM
 from ornitail.vehicle.geometry import TailGeometry
 
 _PREDICT_OPTIONS = ("predict_b", "predict_b_le", "predict_c_r", "predict_c_t", "predict_x_h_mm")
@@ -28,7 +30,7 @@ def _prediction_vector(options: dict[str, float | None]) -> tuple[float, ...] | 
         raise UserInputError("--predict-*", f"a prediction needs {', '.join(missing)} too")
     for name, value in given.items():
         require_finite(f"--{name.replace('_', '-')}", value)
-    x_h_low, x_h_high = X_H_RANGE_MM
+    x_h_low, x_h_high = TAIL_POSITION_RANGE_MM
     if not x_h_low <= given["predict_x_h_mm"] <= x_h_high:
         raise UserInputError(
             "--predict-x-h-mm",
@@ -92,6 +94,10 @@ def trends_command(
 ) -> None:
     """Fit steady state and derivatives against tail geometry and x_h; print coefficients, LOO RMSE,
     sources and, with --predict-*, a prediction with both intervals and its extrapolation measure."""
+    if not (study or campaigns or tunnels or user_csvs):
+        raise UserInputError(
+            "sources", "give at least one of --study, --campaign, --tunnel, --user-csv"
+        )
     vector = _prediction_vector(predict_options)
     if out_dir is not None:
         prepare_output_directory(out_dir)

@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from ornitail.core.output import emit, json_option
+from ornitail.app.cli_output import emit, json_option
 from ornitail.flight.fit_report_files import prepare_directory, write_fit_report
 from ornitail.flight.flight_logs import read_flight_log
 from ornitail.flight.identification_result import IdentificationResult

@@ -8,12 +8,13 @@ from typing import Any
 
 import click
 
+from ornitail.app.cli_output import emit, json_option
+from ornitail.app.trend_source_options import trend_source_options
 from ornitail.core.input_files import prepare_output_directory
-from ornitail.core.output import emit, json_option
 from ornitail.design.pareto import FRONT_KINDS, pareto_front, write_front
 from ornitail.design.proposal import ProposalProblem
-from ornitail.design.propose_cli import check_solver_options, targets_from_options
-from ornitail.design.trend_sources import trend_model_from_options, trend_source_options
+from ornitail.design.proposal_report import check_solver_settings, design_targets
+from ornitail.design.trend_sources import trend_model_from_sources
 
 
 def _render(result: dict[str, Any]) -> str:
@@ -60,12 +61,10 @@ def pareto_command(
     as_json,
 ) -> None:
     """Trade-off front by epsilon-constraint re-solves of the proposal problem."""
-    check_solver_options(x_h_mm, start_count, point_count=point_count)
-    targets = targets_from_options(
-        theta_ss_deg, theta_tol_deg, None, 0.0, None, 0.0, None, None, 0.0
-    )
+    check_solver_settings(x_h_mm, start_count, point_count=point_count)
+    targets = design_targets(theta_ss_deg, theta_tol_deg, None, 0.0, None, 0.0, None, None, 0.0)
     prepare_output_directory(out_dir)
-    trend_model = trend_model_from_options(study, campaigns, tunnels, user_csvs, basis)
+    trend_model = trend_model_from_sources(study, campaigns, tunnels, user_csvs, basis)
     problem = ProposalProblem(trend_model)
     points = pareto_front(problem, kind, targets, x_h_mm / 1e3, point_count, start_count)
     result = {

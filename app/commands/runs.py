@@ -17,8 +17,8 @@ from ornitail.acquisition.catalog import (
     default_data_root,
     run_file_problems,
 )
+from ornitail.app.cli_output import emit, json_option
 from ornitail.core.errors import UserInputError
-from ornitail.core.output import emit, json_option
 
 _TABLE_COLUMNS = (
     ("run_id", 34),

@@ -6,10 +6,10 @@ from pathlib import Path
 
 import click
 
+from ornitail.app.cli_output import emit, json_option
 from ornitail.calibration.hotwire_fit import DEFAULT_POLYNOMIAL_ORDER
 from ornitail.core.errors import UserInputError, require_finite
 from ornitail.core.input_files import prepare_output_file
-from ornitail.core.output import emit, json_option
 
 # The calibration modules are imported inside the commands (only hotwire_fit's default is needed above, and with
 # it numpy): `ornitail calibration --help` stays fast.

@@ -16,7 +16,7 @@ import click
 
 from ornitail.design.drawing import write_proposal_drawings
 from ornitail.design.proposal import propose
-from ornitail.design.propose_cli import proposal_result, targets_from_options
+from ornitail.design.proposal_report import design_targets, proposal_result
 from ornitail.design.trend_sources import gather_observations
 from ornitail.design.trends import fit_trends
 from ornitail.flight.campaign import run_campaign
@@ -59,7 +59,7 @@ def design_from_simulated_campaign(
         False, (str(campaign_csv),), tuple(map(str, tunnel_derivatives)), ()
     )
     trend_model = fit_trends(observations, basis="linear")
-    targets = targets_from_options(
+    targets = design_targets(
         DEMO_THETA_SS_DEG,
         DEMO_THETA_TOLERANCE_DEG,
         None,

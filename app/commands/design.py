@@ -6,24 +6,24 @@ from typing import Any
 
 import click
 
-from ornitail.core.cli import LazyCommand, LazyGroup
-from ornitail.core.output import emit, json_option
+from ornitail.app.cli import LazyCommand, LazyGroup
+from ornitail.app.cli_output import emit, json_option
 
 design_group = LazyGroup(
     "design",
     help="Tail design: geometry, trend fits, proposals.",
     lazy_commands={
         "trends": LazyCommand(
-            "ornitail.design.trends_cli:trends_command",
+            "ornitail.app.commands.design_trends:trends_command",
             "Fit steady state and derivatives against tail geometry and x_h; print coefficients, LOO RMSE, "
             "sources and, with --predict-*, a prediction with both intervals and its extrapolation measure.",
         ),
         "propose": LazyCommand(
-            "ornitail.design.propose_cli:propose_command",
+            "ornitail.app.commands.design_propose:propose_command",
             "Propose a tail (b, b_LE, c_r, c_t, x_h) meeting steady-state and pitch-damping targets.",
         ),
         "pareto": LazyCommand(
-            "ornitail.design.pareto_cli:pareto_command",
+            "ornitail.app.commands.design_pareto:pareto_command",
             "Trade-off front by epsilon-constraint re-solves of the proposal problem.",
         ),
     },

@@ -7,8 +7,8 @@ from typing import Any
 
 import click
 
+from ornitail.app.cli_output import emit, json_option
 from ornitail.core.input_files import prepare_output_directory
-from ornitail.core.output import emit, json_option
 
 
 def _render(result: dict[str, Any]) -> str:
@@ -38,7 +38,7 @@ def export_command(inputs: tuple[Path, ...], export_format: str, out: Path, as_j
     Each INPUT is a run directory (its samples and set-point table) or a CSV table that `ornitail process` or
     `ornitail flight campaign` wrote (docs/export.md).
     """
-    from ornitail.core.export import export_inputs  # imported here: --help stays fast
+    from ornitail.app.export import export_inputs  # imported here: --help stays fast
 
     prepare_output_directory(out)
     written = export_inputs(list(inputs), export_format, out)

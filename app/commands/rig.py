@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from ornitail.core.output import emit, json_option
+from ornitail.app.cli_output import emit, json_option
 
 if TYPE_CHECKING:
     from ornitail.acquisition.rig_check import RigCheck
@@ -39,7 +39,7 @@ def rig_check_record(check: RigCheck) -> dict[str, Any]:
 def rig_check_exit_code(check: RigCheck) -> int:
     """0 every instrument ok, 3 any failed, else 5 when a port is held by another process."""
     from ornitail.acquisition.rig_check import STATUS_FAILED, STATUS_IN_USE
-    from ornitail.acquisition.sweep_cli import EXIT_BUSY, EXIT_FAILED
+    from ornitail.app.sweep_session import EXIT_BUSY, EXIT_FAILED
 
     statuses = {instrument.status for instrument in check.instruments}
     if STATUS_FAILED in statuses:

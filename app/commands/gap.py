@@ -8,10 +8,11 @@ from pathlib import Path
 
 import click
 
+from ornitail.app.cli_output import emit, json_option
+from ornitail.app.progress import Progress
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import prepare_output_directory, prepare_output_file
-from ornitail.core.output import emit, json_option, to_jsonable
-from ornitail.core.progress import Progress
+from ornitail.core.output import to_jsonable
 
 # The diagnosis, example data and benchmark (numpy, scipy, casadi, matplotlib) are imported inside the
 # commands: `ornitail gap --help` stays fast.

@@ -8,9 +8,9 @@ from typing import Any
 
 import click
 
+from ornitail.app.cli_output import emit, json_option
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import prepare_output_file
-from ornitail.core.output import emit, json_option
 
 # The simulator (numpy, scipy, pandas) is imported inside the commands: `ornitail sim --help` stays fast.
 

@@ -1,9 +1,9 @@
-"""``ornitail sweep PLAN --rig RIG``: run a sweep plan headless, with progress, signal handling and resume.
+"""Running a sweep plan headless: progress, signal handling, resume, the result record and the exit code.
 
-Exit paths (docs/sweep-plan.md): every one writes the stop record of the run being recorded and brings motor, fan
-and strut to their safe state as far as the instruments still answer.
+What ``ornitail sweep`` and the demo run. Exit paths (docs/sweep-plan.md): every one writes the stop record of the
+run being recorded and brings motor, fan and strut to their safe state as far as the instruments still answer.
 
-- 0 completed; 4 incomplete (points to record again with ``--resume``); 2 a mistake in the plan, rig file or
+- 0 completed; 4 incomplete (points to record again by resuming); 2 a mistake in the plan, rig file or
   options (one line, nothing moved);
 - 3 an instrument failed (absent port, unplugged, no reply; at connect or mid-run): one line naming instrument,
   port and failure, then the summary of what was recorded;
@@ -29,13 +29,12 @@ from typing import Any
 
 import click
 
-from ornitail.acquisition.catalog import RunCatalog, default_data_root
+from ornitail.acquisition.catalog import RunCatalog
 from ornitail.acquisition.instrument_errors import InstrumentError, InstrumentInUse
 from ornitail.acquisition.live_balance import LiveBalance
 from ornitail.acquisition.recorder import Recorder
 from ornitail.acquisition.recording_reader import load_recording
 from ornitail.acquisition.rig import Rig
-from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE
 from ornitail.acquisition.sweep import (
     SweepChainBusy,
     SweepEvent,
@@ -48,10 +47,9 @@ from ornitail.acquisition.sweep import (
     run_sweep,
 )
 from ornitail.acquisition.sweep_plan import SweepPlan, load_plan
+from ornitail.app.progress import Progress
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import prepare_output_directory
-from ornitail.core.output import emit, json_option
-from ornitail.core.progress import Progress
 
 EXIT_ABORTED = 130
 """Ctrl-C (SIGINT, 128 + 2): stopped after the current point (first) or at once (second)."""
@@ -429,7 +427,7 @@ def exit_code_of(result: SweepResult) -> int:
     return codes.get(result.status, EXIT_FAILED)
 
 
-def _render(record: dict[str, Any]) -> str:
+def render_sweep_result(record: dict[str, Any]) -> str:
     lines = [f"sweep {record['status']}: {record['message']}"]
     lines += [f"  {warning}" for warning in record.get("warnings", [])]
     for health in record["link_health"]:
@@ -470,62 +468,3 @@ def guarded(action: Callable[[], SweepResult]) -> SweepResult:
     except KeyboardInterrupt as interrupt:
         _say(f"ornitail: sweep {interrupt or 'stopped at once'}; every recorded set point is kept")
         sys.exit(getattr(interrupt, "exit_code", EXIT_ABORTED))
-
-
-@click.command("sweep")
-@click.argument("plan", type=click.Path(path_type=Path))
-@click.option(
-    "--rig",
-    "rig_path",
-    type=click.Path(path_type=Path),
-    default=DEFAULT_RIG_FILE,
-    show_default="the simulated rig",
-    help="Rig file (TOML).",
-)
-@click.option(
-    "--data-root",
-    type=click.Path(path_type=Path),
-    default=None,
-    help="Where runs and the catalog live [default: $ORNITAIL_DATA or ./ornitail-data].",
-)
-@click.option(
-    "--resume",
-    is_flag=True,
-    help="Continue the newest sweep of this plan at its first unfinished point.",
-)
-@click.option(
-    "--time-scale",
-    type=float,
-    default=None,
-    help="Simulated rigs only: run this many times faster than real time.",
-)
-@json_option
-def sweep_command(
-    plan: Path,
-    rig_path: Path,
-    data_root: Path | None,
-    resume: bool,
-    time_scale: float | None,
-    as_json: bool,
-) -> None:
-    """Run the sweep PLAN on the rig: check every set point against the rig's limits, then move, settle and
-    record each point. First Ctrl-C finishes the current point and stops; a second, SIGTERM or SIGHUP stops at
-    once. Exit codes: 0 completed, 2 input error, 3 instrument failed, 4 incomplete, 5 rig or chain in use,
-    130 Ctrl-C, 143 SIGTERM, 129 SIGHUP."""
-    signals = SweepSignals(SweepStop()).install()  # kept to the end: later signals are only noted
-    check_time_scale_option(time_scale)
-    result = guarded(
-        lambda: run_sweep_with_progress(
-            plan,
-            rig_path,
-            data_root or default_data_root(),
-            resume=resume,
-            time_scale=time_scale,
-            signals=signals,
-        )
-    )
-    signals.closing()
-    with contextlib.suppress(OSError):  # stdout may be a closed terminal (SIGHUP) or pipe
-        emit(sweep_result_record(result), as_json, _render)
-    signals.ignore_from_now()
-    sys.exit(exit_code_of(result))

@@ -1,28 +1,20 @@
-"""``ornitail design propose``: a tail geometry for steady-state and damping targets (design/proposal.py)."""
+"""A design proposal in user units: targets checked and converted to SI, the result as a plain dict
+(mm, cm^2, deg in the field names), its readable text and its honest status line.
+
+Shared by ``ornitail design propose``, ``design pareto``, the demo and the window's design tab.
+"""
 
 from __future__ import annotations
 
 import math
-from pathlib import Path
 from typing import Any
 
-import click
-
 from ornitail.core.errors import UserInputError, require_finite
-from ornitail.core.input_files import prepare_output_directory
-from ornitail.core.output import emit, json_option
+from ornitail.core.normal_quantiles import NORMAL_QUANTILE_95
 from ornitail.design.design_evaluation import IntervalEstimate, PredictedQuantity
-from ornitail.design.drawing import write_proposal_drawings
-from ornitail.design.proposal import (
-    INTERVAL_KINDS,
-    OBJECTIVES,
-    DesignTargets,
-    Proposal,
-    TargetBand,
-    propose,
-)
-from ornitail.design.trend_sources import trend_model_from_options, trend_source_options
+from ornitail.design.proposal import MAX_STARTS, DesignTargets, Proposal, TargetBand
 from ornitail.design.trends import TrendModel
+from ornitail.vehicle.geometry import require_tail_position_mm
 
 _UNMET_UNITS = {
     "theta_ss": ("deg", math.degrees(1.0)),
@@ -33,12 +25,8 @@ _UNMET_UNITS = {
 }
 
 
-MAX_TARGETS = {"--v-ss-m-s": 20.0, "--f-ss-hz": 100.0, "--omega-rad-s": 1000.0}
+MAX_TARGETS = {"v_ss_m_s": 20.0, "f_ss_hz": 100.0, "omega_rad_s": 1000.0}
 """Largest targets accepted (m/s, Hz, rad/s): far beyond any flapping-wing MAV."""
-X_H_RANGE_MM = (20.0, 300.0)
-"""Tail positions accepted, mm (as the simulator's)."""
-MAX_STARTS = 1000
-"""Most optimiser starts per position."""
 MAX_ROBUST_K = 10.0
 """Largest robust factor k (sigmas)."""
 
@@ -55,26 +43,22 @@ def _band(
     return TargetBand.around(value * scale, tolerance * scale)
 
 
-def check_solver_options(
+def check_solver_settings(
     x_h_mm: float | None, start_count: int, robust_k: float = 0.0, point_count: int | None = None
 ) -> None:
-    """Refuse a tail position, start count, robust factor or front size outside its range."""
+    """Refuse a tail position (mm), start count, robust factor or front size outside its range, naming it."""
     if x_h_mm is not None:
-        require_finite("--x-h-mm", x_h_mm)
-        if not X_H_RANGE_MM[0] <= x_h_mm <= X_H_RANGE_MM[1]:
-            raise UserInputError(
-                "--x-h-mm", f"{x_h_mm:g} mm is outside {X_H_RANGE_MM[0]:g}-{X_H_RANGE_MM[1]:g} mm"
-            )
+        require_tail_position_mm("x_h_mm", x_h_mm)
     if not 1 <= start_count <= MAX_STARTS:
-        raise UserInputError("--starts", f"{start_count} is outside 1..{MAX_STARTS}")
-    require_finite("--robust-k", robust_k)
+        raise UserInputError("start_count", f"{start_count} is outside 1..{MAX_STARTS}")
+    require_finite("robust_k", robust_k)
     if not 0.0 <= robust_k <= MAX_ROBUST_K:
-        raise UserInputError("--robust-k", f"{robust_k:g} is outside 0..{MAX_ROBUST_K:g}")
+        raise UserInputError("robust_k", f"{robust_k:g} is outside 0..{MAX_ROBUST_K:g}")
     if point_count is not None and not 2 <= point_count <= 100:
-        raise UserInputError("--points", f"{point_count} is outside 2..100")
+        raise UserInputError("point_count", f"{point_count} is outside 2..100")
 
 
-def targets_from_options(
+def design_targets(
     theta_ss_deg: float | None,
     theta_tol_deg: float,
     v_ss_m_s: float | None,
@@ -85,21 +69,20 @@ def targets_from_options(
     omega_rad_s: float | None,
     omega_tol_rad_s: float,
 ) -> DesignTargets:
-    """Targets in SI from the command-line values (degrees converted to radians)."""
+    """Targets in SI from values in user units (degrees converted to radians); a value out of range raises
+    :class:`UserInputError` naming the target (``v_ss_m_s``) and the value."""
     if zeta is not None:
-        require_finite("--zeta", zeta)
+        require_finite("zeta", zeta)
         if not 0.0 < zeta < 0.99:
             raise UserInputError(
-                "--zeta", f"value {zeta!r} must lie in (0, 0.99): an oscillatory mode"
+                "zeta", f"value {zeta!r} must lie in (0, 0.99): an oscillatory mode"
             )
     if theta_ss_deg is not None and not 0.0 < theta_ss_deg < 90.0:
-        raise UserInputError(
-            "--theta-ss-deg", f"value {theta_ss_deg!r} must lie in (0, 90) degrees"
-        )
+        raise UserInputError("theta_ss_deg", f"value {theta_ss_deg!r} must lie in (0, 90) degrees")
     for where, value in (
-        ("--v-ss-m-s", v_ss_m_s),
-        ("--f-ss-hz", f_ss_hz),
-        ("--omega-rad-s", omega_rad_s),
+        ("v_ss_m_s", v_ss_m_s),
+        ("f_ss_hz", f_ss_hz),
+        ("omega_rad_s", omega_rad_s),
     ):
         if value is not None and not (math.isfinite(value) and value > 0):
             raise UserInputError(where, f"value {value!r} must be a positive finite number")
@@ -107,13 +90,13 @@ def targets_from_options(
             raise UserInputError(where, f"value {value:g} is more than {MAX_TARGETS[where]:g}")
     return DesignTargets(
         theta_ss_rad=_band(
-            "--theta-ss-deg", theta_ss_deg, theta_tol_deg, math.radians(1.0), "--theta-tol-deg"
+            "theta_ss_deg", theta_ss_deg, theta_tol_deg, math.radians(1.0), "theta_tol_deg"
         ),
-        v_ss_m_s=_band("--v-ss-m-s", v_ss_m_s, v_tol_m_s, 1.0, "--v-tol-m-s"),
-        f_ss_hz=_band("--f-ss-hz", f_ss_hz, f_tol_hz, 1.0, "--f-tol-hz"),
+        v_ss_m_s=_band("v_ss_m_s", v_ss_m_s, v_tol_m_s, 1.0, "v_tol_m_s"),
+        f_ss_hz=_band("f_ss_hz", f_ss_hz, f_tol_hz, 1.0, "f_tol_hz"),
         damping_ratio_min=zeta,
         natural_frequency_rad_s=_band(
-            "--omega-rad-s", omega_rad_s, omega_tol_rad_s, 1.0, "--omega-tol-rad-s"
+            "omega_rad_s", omega_rad_s, omega_tol_rad_s, 1.0, "omega_tol_rad_s"
         ),
     )
 
@@ -122,7 +105,7 @@ def _interval_dict(
     estimate: IntervalEstimate | PredictedQuantity, scale: float = 1.0
 ) -> dict[str, Any]:
     value, sigma_mean, sigma_new = estimate.value, estimate.sigma_mean, estimate.sigma_new
-    z = 1.959963984540054
+    z = NORMAL_QUANTILE_95
     result = {
         "value": value * scale,
         "sigma_mean": sigma_mean * scale,
@@ -276,139 +259,3 @@ def render_proposal(result: dict[str, Any]) -> str:
     for name, path in result.get("files", {}).items():
         lines.append(f"{name}: {path}")
     return "\n".join(lines)
-
-
-@click.command("propose")
-@click.option(
-    "--theta-ss-deg", type=float, default=None, help="Target steady pitch attitude (deg)."
-)
-@click.option(
-    "--theta-tol-deg",
-    type=float,
-    default=0.0,
-    show_default=True,
-    help="Half-width of the theta band (deg).",
-)
-@click.option("--v-ss-m-s", type=float, default=None, help="Target steady airspeed (m/s).")
-@click.option(
-    "--v-tol-m-s",
-    type=float,
-    default=0.0,
-    show_default=True,
-    help="Half-width of the V band (m/s).",
-)
-@click.option("--f-ss-hz", type=float, default=None, help="Target flapping frequency (Hz).")
-@click.option(
-    "--f-tol-hz", type=float, default=0.0, show_default=True, help="Half-width of the f band (Hz)."
-)
-@click.option(
-    "--zeta", type=float, default=None, help="Minimum damping ratio of the oscillatory pitch mode."
-)
-@click.option(
-    "--omega-rad-s", type=float, default=None, help="Target natural frequency of that mode (rad/s)."
-)
-@click.option(
-    "--omega-tol-rad-s",
-    type=float,
-    default=0.0,
-    show_default=True,
-    help="Half-width of the omega band.",
-)
-@click.option("--objective", type=click.Choice(OBJECTIVES), default="min-area", show_default=True)
-@click.option(
-    "--robust-k",
-    type=float,
-    default=0.0,
-    show_default=True,
-    help="Constrain zeta - k sigma_zeta >= --zeta (delta method).",
-)
-@click.option(
-    "--robust-interval",
-    type=click.Choice(INTERVAL_KINDS),
-    default="new",
-    show_default=True,
-    help="sigma_zeta of the mean trend or of a new flight.",
-)
-@click.option("--x-h-mm", type=float, default=None, help="Use this tail position only (mm).")
-@click.option("--continuous-x-h", is_flag=True, help="Treat x_h as continuous (57-126 mm).")
-@click.option(
-    "--starts",
-    "start_count",
-    type=int,
-    default=8,
-    show_default=True,
-    help="Sobol starts per position.",
-)
-@trend_source_options
-@click.option(
-    "--out",
-    "out_dir",
-    type=click.Path(file_okay=False),
-    default="proposal",
-    show_default=True,
-    help="Directory for planform.svg/png and cut_1to1.svg.",
-)
-@json_option
-def propose_command(
-    theta_ss_deg,
-    theta_tol_deg,
-    v_ss_m_s,
-    v_tol_m_s,
-    f_ss_hz,
-    f_tol_hz,
-    zeta,
-    omega_rad_s,
-    omega_tol_rad_s,
-    objective,
-    robust_k,
-    robust_interval,
-    x_h_mm,
-    continuous_x_h,
-    start_count,
-    study,
-    campaigns,
-    tunnels,
-    user_csvs,
-    basis,
-    out_dir,
-    as_json,
-) -> None:
-    """Propose a tail (b, b_LE, c_r, c_t, x_h) meeting steady-state and pitch-damping targets."""
-    targets = targets_from_options(
-        theta_ss_deg,
-        theta_tol_deg,
-        v_ss_m_s,
-        v_tol_m_s,
-        f_ss_hz,
-        f_tol_hz,
-        zeta,
-        omega_rad_s,
-        omega_tol_rad_s,
-    )
-    if all(band is None for band in targets.bands()) and objective != "max-damping":
-        raise UserInputError(
-            "targets",
-            "give at least one target (--theta-ss-deg, --v-ss-m-s, --f-ss-hz, --zeta, --omega-rad-s)",
-        )
-    if x_h_mm is not None and continuous_x_h:
-        raise UserInputError("--x-h-mm", "give either --x-h-mm or --continuous-x-h, not both")
-    check_solver_options(x_h_mm, start_count, robust_k)
-    prepare_output_directory(out_dir)
-    trend_model = trend_model_from_options(study, campaigns, tunnels, user_csvs, basis)
-    proposal = propose(
-        trend_model,
-        targets,
-        objective=objective,
-        robust_k=robust_k,
-        interval_kind=robust_interval,
-        x_h_m=None if x_h_mm is None else x_h_mm / 1e3,
-        continuous_x_h=continuous_x_h,
-        start_count=start_count,
-    )
-    result = proposal_result(proposal, trend_model)
-    title = (
-        f"S {result['s_cm2']:.1f} cm^2, AR {result['ar']:.2f}, x_h {result['x_h_mm']:.0f} mm, "
-        f"zeta {proposal.evaluation.damping_ratio.value:.2f}"
-    )
-    result["files"] = write_proposal_drawings(proposal.geometry, title, Path(out_dir))
-    emit(result, as_json, render_proposal)

@@ -42,13 +42,40 @@ class _UserErrorsAsOneLine(click.Group):
             _exit_with_click_error(error)
 
     def invoke(self, ctx: click.Context):  # noqa: D102 - click override
+        # click empties both while invoking (``protected_args`` is ``_protected_args`` from click 8.2)
+        protected = ctx._protected_args if hasattr(ctx, "_protected_args") else ctx.protected_args
+        arguments = [*protected, *ctx.args]
         try:
             return super().invoke(ctx)
         except UserInputError as error:
-            click.echo(f"ornitail: error: {_one_line(str(error))}", err=True)
+            where = _option_of_parameter(_invoked_command(ctx, arguments), error.where)
+            message = str(error) if where is None else f"{where}: {error.problem}"
+            click.echo(f"ornitail: error: {_one_line(message)}", err=True)
             sys.exit(2)
         except click.ClickException as error:
             _exit_with_click_error(error)
+
+
+def _invoked_command(ctx: click.Context, arguments: list[str]) -> click.Command:
+    """The command the group's ``arguments`` name, down through the groups (``design propose``)."""
+    command: click.Command = ctx.command
+    args = list(arguments)
+    while isinstance(command, click.Group) and args:
+        name = args.pop(0)
+        subcommand = command.get_command(ctx, name)
+        if subcommand is None:
+            break
+        command = subcommand
+    return command
+
+
+def _option_of_parameter(command: click.Command, where: str) -> str | None:
+    """The option (``--starts``) of the invoked command whose parameter a library error names
+    (``start_count``), or None: library errors name parameters, files and keys, never command-line flags."""
+    for parameter in command.params:
+        if isinstance(parameter, click.Option) and parameter.name == where:
+            return max(parameter.opts, key=len)
+    return None
 
 
 @dataclass(frozen=True)
@@ -79,47 +106,49 @@ def _attribute(target: str) -> Any:
 
 _AREA_COMMANDS = {
     "calibration": LazyCommand(
-        "ornitail.calibration.cli:calibration_group", "Balance, hot-wire and tunnel calibrations."
+        "ornitail.app.commands.calibration:calibration_group",
+        "Balance, hot-wire and tunnel calibrations.",
     ),
     "demo": LazyCommand(
-        "ornitail.core.demo:demo_command",
+        "ornitail.app.demo:demo_command",
         "Run the study's tunnel protocol on the simulated rig and print cycle-averaged forces.",
     ),
     "design": LazyCommand(
-        "ornitail.design.cli:design_group", "Tail design: geometry, trend fits, proposals."
+        "ornitail.app.commands.design:design_group", "Tail design: geometry, trend fits, proposals."
     ),
     "export": LazyCommand(
-        "ornitail.core.export_cli:export_command",
+        "ornitail.app.commands.export:export_command",
         "Export run directories or processed tables (CSV) to MATLAB, Parquet or NetCDF with units.",
     ),
     "flight": LazyCommand(
-        "ornitail.flight.cli:flight_group",
+        "ornitail.app.commands.flight:flight_group",
         "Free-flight system identification.",
-        extras=("ornitail.flight.campaign_cli:campaign_command",),
+        extras=("ornitail.app.commands.flight_campaign:campaign_command",),
     ),
     "gap": LazyCommand(
-        "ornitail.gap.cli:gap_group", "Sim-to-real gap: where it lies, which effect, how far."
+        "ornitail.app.commands.gap:gap_group",
+        "Sim-to-real gap: where it lies, which effect, how far.",
     ),
     "gui": LazyCommand(
-        "ornitail.gui.cli:gui_command",
+        "ornitail.app.commands.gui:gui_command",
         "Open the desktop window: live view, cycle view, controls, sweeps, runs and design.",
     ),
     "process": LazyCommand(
-        "ornitail.balance.process_cli:process_command",
+        "ornitail.app.commands.process:process_command",
         "Cycle-average recorded runs; write tail contribution, stability derivatives and figures.",
     ),
     "rig": LazyCommand(
-        "ornitail.acquisition.rig_check_cli:rig_group", "Rig files and the instruments they name."
+        "ornitail.app.commands.rig:rig_group", "Rig files and the instruments they name."
     ),
     "runs": LazyCommand(
-        "ornitail.acquisition.runs_cli:runs_command",
+        "ornitail.app.commands.runs:runs_command",
         "List recorded runs, oldest first; runs whose process died are shown as crashed.",
     ),
     "sim": LazyCommand(
-        "ornitail.sim.cli:sim_group", "Physics simulator of the DelFly II with its tail."
+        "ornitail.app.commands.sim:sim_group", "Physics simulator of the DelFly II with its tail."
     ),
     "sweep": LazyCommand(
-        "ornitail.acquisition.sweep_cli:sweep_command",
+        "ornitail.app.commands.sweep:sweep_command",
         "Run the sweep PLAN on the rig: check every set point against the rig's limits, then move, settle and "
         "record each point.",
     ),

@@ -8,14 +8,14 @@ from typing import Any
 import click
 
 from ornitail.acquisition.calibration_copies import CalibrationSources
+from ornitail.app.cli_output import emit, json_option
+from ornitail.app.progress import Progress
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import prepare_output_directory
-from ornitail.core.output import emit, json_option
-from ornitail.core.progress import Progress
 
 PROGRESS_DELAY_S = 1.0
 """In a terminal the progress bar appears only once processing has taken this long (s); in a log, progress lines
-are timestamped and start at once (``ornitail.core.progress``)."""
+are timestamped and start at once (``ornitail.app.progress``)."""
 
 
 def _render(result: dict[str, Any]) -> str:
