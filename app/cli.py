@@ -48,8 +48,14 @@ class _UserErrorsAsOneLine(click.Group):
         try:
             return super().invoke(ctx)
         except UserInputError as error:
-            where = _option_of_parameter(_invoked_command(ctx, arguments), error.where)
+            command = _invoked_command(ctx, arguments)
+            where = _option_of_parameter(command, error.where)
             message = str(error) if where is None else f"{where}: {error.problem}"
+            remedy = error.remedy_parameter and _option_of_parameter(
+                command, error.remedy_parameter
+            )
+            if remedy:
+                message += f" ({remedy})"
             click.echo(f"ornitail: error: {_one_line(message)}", err=True)
             sys.exit(2)
         except click.ClickException as error:

@@ -282,6 +282,7 @@ def _refuse_flagged(point: _RecordedPoint) -> None:
         f"ADC limit or the board's over-range flag) and {record.over_range_samples or 0} over the sensor's "
         f"rated load in the {record.kind}'s record; its loads are clipped: record it again within range, or "
         "process it with saturated records kept, flagged",
+        remedy_parameter="keep_saturated",
     )
 
 

@@ -21,12 +21,16 @@ class UserInputError(Exception):
         The file, field or option the mistake is in, e.g. ``"rig.toml: [balance].calibration"``.
     problem : str
         What is wrong, in words a tunnel engineer understands, e.g. ``"file not found"``.
+    remedy_parameter : str, optional
+        The parameter of the raising function that would accept the input (``"keep_saturated"``); a front end
+        that has an option for it names the option after the message.
     """
 
-    def __init__(self, where: str, problem: str) -> None:
+    def __init__(self, where: str, problem: str, remedy_parameter: str | None = None) -> None:
         super().__init__(f"{where}: {problem}")
         self.where = where
         self.problem = problem
+        self.remedy_parameter = remedy_parameter
 
 
 def require_finite(where: str, values: float | Iterable[float]) -> None:

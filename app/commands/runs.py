@@ -127,6 +127,7 @@ def _render_table(result: dict[str, Any]) -> str:
 @click.option("--tailed/--tailless", default=None, help="Only runs with / without the tail.")
 @click.option(
     "--status",
+    "exit_status",
     default=None,
     help="completed, incomplete, aborted, failed, crashed or running.",
 )
@@ -137,7 +138,7 @@ def runs_command(
     tail_id: str | None,
     x_h_mm_text: str | None,
     tailed: bool | None,
-    status: str | None,
+    exit_status: str | None,
     since_text: str | None,
     as_json: bool,
 ) -> None:
@@ -148,7 +149,7 @@ def runs_command(
         tail_id=tail_id,
         x_h_m=None if x_h_mm_text is None else parse_x_h_mm(x_h_mm_text),
         tailed=tailed,
-        exit_status=status,
+        exit_status=exit_status,
         started_since_utc=None if since_text is None else parse_since(since_text),
     )
     run_filter.validate()

@@ -155,8 +155,8 @@ def test_rescan_rebuilds_a_lost_catalog_from_the_run_directories(populated_data_
 @pytest.mark.parametrize(
     ("run_filter", "where"),
     [
-        (RunFilter(exit_status="finished"), "--status"),
-        (RunFilter(x_h_m=float("nan")), "--x-h-mm"),
+        (RunFilter(exit_status="finished"), "exit_status"),  # the parameter; the CLI shows --status
+        (RunFilter(x_h_m=float("nan")), "x_h_mm"),
     ],
 )
 def test_bad_filters_are_user_errors(tmp_path, run_filter, where):

@@ -159,7 +159,7 @@ def test_a_point_lossy_through_its_retakes_ends_the_sweep_incomplete_and_resume_
     assert exit_code_of(result) == EXIT_INCOMPLETE == 4
     assert result.incomplete_points == [target.index], result.message
     assert result.completed_points == len(plan.set_points) - 1
-    assert f"#{target.index} " in result.message and "--resume" in result.message
+    assert f"#{target.index} " in result.message and "resume the sweep" in result.message
     tailed = load_recording(result.run_directories[0])
     assert tailed.status == "incomplete"
     assert f"#{target.index} " in tailed.failure_reason
