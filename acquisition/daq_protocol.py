@@ -118,12 +118,6 @@ class DaqFrameParser:
         self._in_garbage = False  # the last decided bytes were garbage (a stretch may go on)
         self.statistics = StreamStatistics()
 
-    def reset(self) -> None:
-        """Forget the undecided tail and the counter history (the totals are kept)."""
-        self._pending = b""
-        self._in_garbage = False
-        self.statistics.last_counter = None
-
     def feed(self, data: bytes, *, final: bool = False) -> DecodedFrames:
         """Parse ``data`` appended to the tail kept from the previous call.
 

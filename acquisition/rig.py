@@ -435,9 +435,3 @@ class Rig:
             balance.stop()
         else:
             balance.stop_polling()
-
-    @property
-    def pitch_limits_deg(self) -> tuple[float, float]:
-        """The rig's pitch limits in degrees (for display)."""
-        limits = self.description.limits
-        return math.degrees(limits.pitch_min_rad), math.degrees(limits.pitch_max_rad)

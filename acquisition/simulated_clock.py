@@ -27,11 +27,3 @@ class SimulatedClock:
     def now_s(self) -> float:
         """Simulated seconds elapsed since the clock was made."""
         return (time.monotonic() - self._wall_start_s) * self.time_scale
-
-    def wall_seconds(self, simulated_seconds: float) -> float:
-        """Wall-clock seconds that ``simulated_seconds`` of simulated time take."""
-        return simulated_seconds / self.time_scale
-
-    def sleep_s(self, simulated_seconds: float) -> None:
-        """Sleep for ``simulated_seconds`` of simulated time."""
-        time.sleep(max(0.0, simulated_seconds / self.time_scale))

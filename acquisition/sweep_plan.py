@@ -151,10 +151,6 @@ class SweepPlan:
     tail_change_s: float = 0.0
     set_points: tuple[SetPoint, ...] = field(default=(), compare=False)
 
-    def configuration_record(self) -> dict[str, Any]:
-        """The configuration as stored with a run (tail id and x_h)."""
-        return {"tail_id": self.tail_id, "x_h_m": self.x_h_m}
-
 
 _SWEEP_KEYS: dict[str, tuple[SweepVariable, float]] = {
     "theta_deg": ("theta", math.pi / 180.0),

@@ -167,16 +167,6 @@ def prepare_output_file(path: str | Path) -> Path:
     return path
 
 
-def write_output_text(path: str | Path, text: str) -> Path:
-    """Write ``text`` (UTF-8) to ``path``; an unwritable path is a user error naming it."""
-    path = prepare_output_file(path)
-    try:
-        path.write_text(text, encoding="utf-8")
-    except OSError as error:
-        _refuse_unwritable(path, error)
-    return path
-
-
 def read_csv_table(path: str | Path, nrows: int | None = None) -> Any:
     """A CSV file (bounded, UTF-8) as a pandas DataFrame; unreadable CSV is refused naming the file."""
     import io

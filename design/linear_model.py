@@ -139,10 +139,6 @@ class ModalSummary:
     natural_frequency_rad_s: float
     other_poles: np.ndarray
 
-    @property
-    def is_stable(self) -> bool:
-        return bool(np.all(self.eigenvalues.real < 0))
-
 
 def modal_summary(matrix: np.ndarray) -> ModalSummary:
     """Eigen-decompose a numeric A; the oscillatory mode is the complex pair of smallest modulus."""

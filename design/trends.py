@@ -387,11 +387,6 @@ class HeldOutPrediction:
     measured_sigma: float | None
     prediction: TrendPrediction
 
-    @property
-    def error_over_sigma_new(self) -> float:
-        """|measured - predicted| / sigma_new of the held-out prediction."""
-        return abs(self.measured - self.prediction.value) / self.prediction.sigma_new
-
 
 def leave_one_out_predictions(
     observations: Sequence[TrendObservation], quantity: str, basis: str | TrendBasis = "linear"
