@@ -49,6 +49,11 @@ from ornitail.acquisition.recording_layout import (
 )
 from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.run_files import read_journal, run_is_live
+from ornitail.acquisition.set_point_recording import (
+    MAX_RETAKES,
+    POLL_INTERVAL_S,
+    record_set_point,
+)
 from ornitail.acquisition.sweep_plan import (
     SetPoint,
     SweepPlan,
@@ -57,13 +62,6 @@ from ornitail.acquisition.sweep_plan import (
     sample_rate_violation,
 )
 from ornitail.core.errors import UserInputError
-
-RECORD_START_DELAY_S = 0.1
-"""Rig time between settling and the first recorded row: covers the driver's ~10 ms block latency."""
-POLL_INTERVAL_S = 0.1
-"""Rig time between readings while settling."""
-MAX_RETAKES = 3
-"""Times a set point's record is taken again when samples were lost inside it."""
 
 
 class SweepStop:
@@ -340,6 +338,13 @@ class _SweepContext:
         """Note a reading of the motor (running or standing) for the drift clock."""
         self.motor_log.observe(running, self.rig.balance_samples_since_start(), self.stream)
 
+    def wait_rig_s(self, seconds: float) -> None:
+        """Wait ``seconds`` of rig time, then check the balance stream for errors and the stop for an abort."""
+        self.rig.wait_simulated_s(seconds)
+        self.stream.raise_if_failed()
+        if self.stop.abort_requested:
+            raise RunAborted("aborted by the operator")
+
     def eta_s(self) -> float:
         remaining = (
             self.plan.set_points[self.completed :] if self.completed else self.plan.set_points
@@ -368,14 +373,6 @@ def _move(rig: Rig, point: SetPoint) -> None:
     rig.set_pitch(point.pitch_rad)
     rig.set_tunnel_velocity(point.tunnel_velocity_m_s)
     rig.set_flapping_frequency(point.flapping_frequency_hz)
-
-
-def _wait_rig_s(context: _SweepContext, seconds: float) -> None:
-    """Wait ``seconds`` of rig time, then check the balance stream for errors and the stop for an abort."""
-    context.rig.wait_simulated_s(seconds)
-    context.stream.raise_if_failed()
-    if context.stop.abort_requested:
-        raise RunAborted("aborted by the operator")
 
 
 def _settle(context: _SweepContext, point: SetPoint) -> float:
@@ -432,132 +429,7 @@ def _settle(context: _SweepContext, point: SetPoint) -> float:
             stable_since_s = now_s
         elif now_s - stable_since_s >= criteria.stable_for_s:
             return now_s - started_s
-        _wait_rig_s(context, POLL_INTERVAL_S)
-
-
-@dataclass
-class RecordConditions:
-    """The rig's conditions read around one record, every ``POLL_INTERVAL_S`` of rig time, and where each reading
-    falls on the balance's sample count.
-
-    The set point is reached only within the settle tolerances and the fan still creeps towards it during the
-    record (first-order lag), so the conditions the loads belong to are these, not the set values. The readings
-    reach the control computer later than the samples they go with (rows arrive after their latency), and a creeping
-    fan makes that a bias: the mean of the raw readings sat about 0.1 mm/s above the record's, which moved Z0 and M0
-    by one to two of their sigmas. So each condition is fitted with a straight line in the sample count and taken
-    at the record's middle sample (the record's mean of a quantity changing linearly). Velocity in m/s from the
-    fan's rpm and the tunnel table, pitch in rad from the strut, motor speed in rpm.
-    """
-
-    first_sample: int
-    """The record's first sample, counted as :meth:`Rig.balance_samples_since_start` counts."""
-    samples: int
-    sample_counts: list[int] = field(default_factory=list)
-    velocities_m_s: list[float] = field(default_factory=list)
-    pitches_rad: list[float] = field(default_factory=list)
-    motor_rpms: list[float] = field(default_factory=list)
-
-    def read(self, rig: Rig) -> None:
-        """Take one reading of every condition the rig can report."""
-        self.sample_counts.append(rig.balance_samples_since_start())
-        self.velocities_m_s.append(rig.read_tunnel_velocity_m_s())
-        self.pitches_rad.append(rig.read_pitch_rad())
-        if rig.motor is not None:
-            self.motor_rpms.append(rig.motor.read_rpm())
-
-    def motor_rpm_mean(self) -> float | None:
-        """Mean motor speed over the readings, rpm (None without a motor)."""
-        return math.fsum(self.motor_rpms) / len(self.motor_rpms) if self.motor_rpms else None
-
-    def at_record_middle(self, values: list[float]) -> float:
-        """``values`` (one per reading) on a least-squares line in the sample count, at the record's middle."""
-        middle = self.first_sample + 0.5 * (self.samples - 1)
-        count = len(values)
-        mean_count = math.fsum(self.sample_counts) / count
-        mean_value = math.fsum(values) / count
-        spread = math.fsum((c - mean_count) ** 2 for c in self.sample_counts)
-        if count < 2 or spread <= 0.0:
-            return mean_value
-        slope = (
-            math.fsum(
-                (c - mean_count) * (v - mean_value)
-                for c, v in zip(self.sample_counts, values, strict=True)
-            )
-            / spread
-        )
-        return mean_value + slope * (middle - mean_count)
-
-    def journal_values(self) -> dict[str, float | int]:
-        """For the set point's ``extra``: ``tunnel_velocity_mean_m_s`` and ``pitch_mean_rad`` (the record's
-        mean, from the line through the readings), ``condition_readings``."""
-        return {
-            "tunnel_velocity_mean_m_s": self.at_record_middle(self.velocities_m_s),
-            "pitch_mean_rad": self.at_record_middle(self.pitches_rad),
-            "condition_readings": len(self.velocities_m_s),
-        }
-
-
-def _take_rows(
-    context: _SweepContext, recorder: Recorder, count: int
-) -> tuple[int, RecordConditions]:
-    """Wait for ``count`` rows sampled from now on; return the first one's row index and the conditions read
-    from then until they arrived."""
-    _wait_rig_s(context, RECORD_START_DELAY_S)
-    samples_since_start = context.rig.balance_samples_since_start()
-    conditions = RecordConditions(samples_since_start, count)
-    first = None
-    while True:
-        conditions.read(context.rig)
-        if conditions.motor_rpms:
-            context.observe_motor(conditions.motor_rpms[-1] > 0.0)
-        if first is None:
-            first = context.stream.first_row_sampled_after(samples_since_start)
-        if first is not None and recorder.next_sample_index >= first + count:
-            return first, conditions
-        _wait_rig_s(context, POLL_INTERVAL_S)
-
-
-def _record_point(
-    context: _SweepContext, recorder: Recorder, point: SetPoint, settle_s: float
-) -> SetPointRecord:
-    """Take the ``record_s`` of the stream sampled from now on as this point's rows and journal it.
-
-    Rows still in transit (pty, driver queue) when the point settled were sampled before it settled; the board's
-    counter, not the arrival order, decides where the point begins. A record with samples lost inside it (counter
-    gaps: an overloaded link) is taken again, up to ``MAX_RETAKES`` times; what the kept record lost is journalled
-    as ``samples_missing_in_record``. The recorder fills in the record's saturated and over-range row counts.
-    """
-    stream = context.stream
-    count = int(round(point.record_s * context.plan.sample_rate_hz))
-    retakes = 0
-    first, conditions = _take_rows(context, recorder, count)
-    missing = stream.samples_missing_in_rows(first, count)
-    while missing and retakes < MAX_RETAKES:
-        retakes += 1
-        first, conditions = _take_rows(context, recorder, count)
-        missing = stream.samples_missing_in_rows(first, count)
-    record = SetPointRecord(
-        plan_point_index=point.index,
-        kind=point.kind,
-        first_sample_index=first,
-        last_sample_index=first + count - 1,
-        pitch_rad=point.pitch_rad,
-        tunnel_velocity_m_s=point.tunnel_velocity_m_s,
-        flapping_frequency_hz=point.flapping_frequency_hz,
-        tail_attached=point.tail_attached,
-        repeat_index=point.repeat,
-        settle_time_s=settle_s,
-        motor_rpm_mean=conditions.motor_rpm_mean(),
-        extra={
-            "sweep": point.sweep,
-            "retakes": retakes,
-            "samples_missing_in_record": missing,
-            **conditions.journal_values(),
-            **context.motor_log.journal_values(stream),
-        },
-    )
-    recorder.complete_set_point(record)
-    return record
+        context.wait_rig_s(POLL_INTERVAL_S)
 
 
 def _run_tail_state(
@@ -604,7 +476,9 @@ def _run_tail_state(
                 )
                 settle_s = _settle(context, point)
                 context.emit("settled", point)
-                record = _record_point(context, recorder, point, settle_s)
+                record = record_set_point(
+                    context, recorder, point, context.plan.sample_rate_hz, settle_s
+                )
                 if record.samples_missing_in_record:
                     context.lossy_points[point.index] = (
                         f"set point {point.label} lost {record.samples_missing_in_record} samples "

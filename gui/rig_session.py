@@ -23,21 +23,24 @@ import numpy as np
 from ornitail.acquisition.catalog import default_data_root
 from ornitail.acquisition.instrument_errors import InstrumentError
 from ornitail.acquisition.live_balance import LiveBalance, balance_stream_layout
+from ornitail.acquisition.motor_running_log import MotorRunningLog
 from ornitail.acquisition.recorder import Recorder
 from ornitail.acquisition.recording_layout import (
     SET_POINT_KIND_MEASUREMENT,
     SET_POINT_KIND_TARE,
     RunConfiguration,
-    SetPointRecord,
 )
 from ornitail.acquisition.rig import Rig
+from ornitail.acquisition.set_point_recording import record_set_point
 from ornitail.acquisition.sweep import SweepEvent, SweepResult
-from ornitail.acquisition.sweep_plan import SettleCriteria, load_plan
+from ornitail.acquisition.sweep_plan import SetPoint, SettleCriteria, load_plan
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.core.errors import UserInputError
 from ornitail.gui.instrument_poller import InstrumentPoller, InstrumentReadings
 from ornitail.gui.sweep_runner import SweepRunner
 
+_SAME_PITCH_RAD = 1e-9
+"""Commanded pitches this close are the same set point (processing pairs tares by pitch to 1e-9 rad)."""
 WIND_OFF_TIMEOUT_S = 60.0
 """Rig time the fan and motor get to come to rest before a tare."""
 SHUTDOWN_TIMEOUT_S = 60.0
@@ -57,12 +60,33 @@ class SessionMessage:
 
 @dataclass
 class ManualRecording:
-    """The manual run being recorded: its recorder and how many points it holds."""
+    """The manual run being recorded: its recorder, the rig and balance stream it records from, its tares.
+
+    It is the :class:`~ornitail.acquisition.set_point_recording.RecordingContext` of the window's records: tares
+    and points become rows of the run exactly as a sweep's do (by the board's sample counter, retaken when samples
+    were lost, with the conditions read during the record and the motor's starts and stops).
+    """
 
     recorder: Recorder
+    rig: Rig
+    stream: LiveBalance
     tailed: bool
+    motor_log: MotorRunningLog = field(default_factory=MotorRunningLog)
     points: int = 0
-    plan_indices: list[int] = field(default_factory=list)
+    tare_pitches_rad: list[float] = field(default_factory=list)
+
+    def wait_rig_s(self, seconds: float) -> None:
+        """Wait ``seconds`` of rig time; raise if the balance stream failed."""
+        self.rig.wait_simulated_s(seconds)
+        self.stream.raise_if_failed()
+
+    def observe_motor(self, running: bool) -> None:
+        """Note a reading of the motor (running or standing) for the drift clock."""
+        self.motor_log.observe(running, self.rig.balance_samples_since_start(), self.stream)
+
+    def has_tare_at(self, pitch_rad: float) -> bool:
+        """Whether the run holds a wind-off tare at this commanded pitch (rad)."""
+        return any(abs(pitch_rad - tare) <= _SAME_PITCH_RAD for tare in self.tare_pitches_rad)
 
 
 class RigSession:
@@ -87,6 +111,9 @@ class RigSession:
         self.tare_volts: np.ndarray | None = None
         self.tare_pitch_rad: float | None = None
         self.tail_attached = True
+        self.commanded: dict[str, float] = {}
+        """The set point last commanded from the window: ``pitch_rad``, ``tunnel_velocity_m_s``,
+        ``flapping_frequency_hz`` (what a manual record journals as its set point, as a sweep does)."""
         self.recording: ManualRecording | None = None
         self.sweep: SweepRunner | None = None
         self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rig-command")
@@ -225,6 +252,31 @@ class RigSession:
         rig = self._require_rig()
         self._require_idle(action)
         getattr(rig, method)(value)
+        key, to_user, unit = _COMMANDED[method]
+        self.commanded[key] = value
+        recording = self.recording
+        if recording is not None and method == "set_flapping_frequency":
+            recording.motor_log.commanded(
+                value, rig.balance_samples_since_start(), recording.stream
+            )
+            if value == 0.0:  # the drift clock needs the stop: wait for it while reading the motor
+                self._wait_motor_at_rest(rig, recording)
+        self.post("info", f"{action}: {to_user(value):.3f} {unit}")
+
+    def _wait_motor_at_rest(self, rig: Rig, recording: ManualRecording | None) -> None:
+        criteria = SettleCriteria()
+        started_s = rig.now_s()
+        while (frequency_hz := rig.read_flapping_frequency_hz()) > criteria.frequency_tolerance_hz:
+            if recording is not None:
+                recording.observe_motor(True)
+            if rig.now_s() - started_s > WIND_OFF_TIMEOUT_S:
+                raise InstrumentError(
+                    "motor",
+                    f"still flapping at {frequency_hz:.2f} Hz after {WIND_OFF_TIMEOUT_S:g} s",
+                )
+            rig.wait_simulated_s(0.1)
+        if recording is not None:
+            recording.observe_motor(False)
 
     # -- tare and recording -------------------------------------------------------------------
     def tare(self, record_s: float) -> Future:
@@ -234,16 +286,13 @@ class RigSession:
     def _wait_wind_off(self, rig: Rig) -> None:
         rig.set_tunnel_velocity(0.0)
         rig.set_flapping_frequency(0.0)
+        self.commanded.update(tunnel_velocity_m_s=0.0, flapping_frequency_hz=0.0)
+        self._wait_motor_at_rest(rig, self.recording)
         criteria = SettleCriteria()
         started_s = rig.now_s()
-        while (
-            rig.read_tunnel_velocity_m_s() > criteria.velocity_tolerance_m_s
-            or rig.read_flapping_frequency_hz() > criteria.frequency_tolerance_hz
-        ):
+        while rig.read_tunnel_velocity_m_s() > criteria.velocity_tolerance_m_s:
             if rig.now_s() - started_s > WIND_OFF_TIMEOUT_S:
-                raise InstrumentError(
-                    "tunnel", f"fan and motor not at rest within {WIND_OFF_TIMEOUT_S:g} s"
-                )
+                raise InstrumentError("tunnel", f"fan not at rest within {WIND_OFF_TIMEOUT_S:g} s")
             rig.wait_simulated_s(0.1)
 
     def _measure(self, rig: Rig, record_s: float):
@@ -255,15 +304,24 @@ class RigSession:
         rig = self._require_rig()
         self._require_idle("tare")
         self._wait_wind_off(rig)
-        pitch_rad = rig.read_pitch_rad()
+        pitch_rad = self._commanded_or_read("pitch_rad", rig.read_pitch_rad)
         rows = self._measure(rig, record_s)
         self.tare_volts, self.tare_pitch_rad = rows.mean_volts[:6].copy(), pitch_rad
-        self._journal_point(SET_POINT_KIND_TARE, rows, pitch_rad, 0.0, 0.0)
+        recording = self.recording
+        where = "display only: no run is recording, so processing cannot use it"
+        if recording is not None:
+            self._record(recording, SET_POINT_KIND_TARE, record_s, pitch_rad, 0.0, 0.0)
+            recording.tare_pitches_rad.append(pitch_rad)
+            where = f"in run {recording.recorder.run_id}"
         self.post(
             "tare",
-            f"wind-off tare at theta = {math.degrees(pitch_rad):.2f} deg over {rows.rows} samples",
+            f"wind-off tare at theta = {math.degrees(pitch_rad):.2f} deg over {rows.rows} samples ({where})",
             self.tare_volts,
         )
+
+    def _commanded_or_read(self, key: str, read: Callable[[], float]) -> float:
+        """The value last commanded from the window for ``key``, else the instrument's reading."""
+        return self.commanded[key] if key in self.commanded else read()
 
     def start_recording(self, tail_id: str, x_h_mm: float, tailed: bool) -> Future:
         """Open a manual run for this configuration (the tail is fitted or removed first if needed)."""
@@ -290,9 +348,15 @@ class RigSession:
             calibration_files=rig.calibration_files(),
         )
         recorder.__enter__()
-        self.recording = ManualRecording(recorder, tailed)
+        recording = ManualRecording(recorder, rig, self.live, tailed)
+        recording.motor_log.running = rig.read_flapping_frequency_hz() > 0.0
         self.live.attach(recorder)
-        self.post("info", f"recording run {recorder.run_id}")
+        recording.motor_log.start_run()
+        self.recording = recording
+        self.post(
+            "info",
+            f"recording run {recorder.run_id}: take a wind-off tare at each pitch before its points",
+        )
 
     def change_tail(self, rig: Rig, tailed: bool) -> None:
         """Fit or remove the tail (motor and fan are brought to rest first)."""
@@ -306,38 +370,56 @@ class RigSession:
 
     def _record_point(self, record_s: float) -> None:
         rig = self._require_rig()
-        if self.recording is None:
+        recording = self.recording
+        if recording is None:
             raise UserInputError("record point", "no recording running: start one first")
-        rows = self._measure(rig, record_s)
-        self._journal_point(
+        pitch_rad = self._commanded_or_read("pitch_rad", rig.read_pitch_rad)
+        if not recording.has_tare_at(pitch_rad):
+            raise UserInputError(
+                "record point",
+                f"this run has no wind-off tare at theta = {math.degrees(pitch_rad):.2f} deg: take one first "
+                "(processing subtracts a tare of the same run at the same pitch)",
+            )
+        self._record(
+            recording,
             SET_POINT_KIND_MEASUREMENT,
-            rows,
-            rig.read_pitch_rad(),
-            rig.read_tunnel_velocity_m_s(),
-            rig.read_flapping_frequency_hz(),
+            record_s,
+            pitch_rad,
+            self._commanded_or_read("tunnel_velocity_m_s", rig.read_tunnel_velocity_m_s),
+            self._commanded_or_read("flapping_frequency_hz", rig.read_flapping_frequency_hz),
         )
 
-    def _journal_point(self, kind, rows, pitch_rad, velocity_m_s, frequency_hz) -> None:
-        recording, rig = self.recording, self.rig
-        if recording is None or rows.first_row_index is None or rig is None:
-            return
-        index = recording.points
-        recording.recorder.complete_set_point(
-            SetPointRecord(
-                plan_point_index=index,
-                kind=kind,
-                first_sample_index=rows.first_row_index,
-                last_sample_index=rows.last_row_index,
-                pitch_rad=pitch_rad,
-                tunnel_velocity_m_s=velocity_m_s,
-                flapping_frequency_hz=frequency_hz,
-                tail_attached=recording.tailed,
-                motor_rpm_mean=rig.motor.read_rpm() if rig.motor is not None else None,
-                extra={"sweep": "manual" if kind == SET_POINT_KIND_MEASUREMENT else "tare"},
-            )
+    def _record(
+        self,
+        recording: ManualRecording,
+        kind: str,
+        record_s: float,
+        pitch_rad: float,
+        velocity_m_s: float,
+        frequency_hz: float,
+    ) -> None:
+        """Record ``record_s`` from now on into the manual run as its next set point (commanded values, SI)."""
+        assert self.live is not None
+        point = SetPoint(
+            index=recording.points,
+            kind=kind,  # type: ignore[arg-type]
+            sweep="manual" if kind == SET_POINT_KIND_MEASUREMENT else "tare",
+            tail_attached=recording.tailed,
+            pitch_rad=pitch_rad,
+            tunnel_velocity_m_s=velocity_m_s,
+            flapping_frequency_hz=frequency_hz,
+            repeat=0,
+            record_s=record_s,
         )
+        record = record_set_point(recording, recording.recorder, point, self.live.sample_rate_hz)
         recording.points += 1
-        self.post("info", f"recorded {kind} #{index}: {rows.rows} samples")
+        rows = record.last_sample_index - record.first_sample_index + 1
+        lost = (
+            f", {record.samples_missing_in_record} samples lost inside it after its retakes"
+            if record.samples_missing_in_record
+            else ""
+        )
+        self.post("info", f"recorded {kind} #{point.index}: {rows} samples{lost}")
 
     def stop_recording(self) -> Future:
         """Close the manual run (``completed``)."""
@@ -439,6 +521,14 @@ class RigSession:
             self.post("error", f"emergency stop: {error}")
         self.submit("emergency stop", self._stop_recording, "emergency stop")
         self.post("info", "EMERGENCY STOP: motor off, fan stopped, strut halted")
+
+
+_COMMANDED = {
+    "set_pitch": ("pitch_rad", math.degrees, "deg"),
+    "set_tunnel_velocity": ("tunnel_velocity_m_s", float, "m/s"),
+    "set_flapping_frequency": ("flapping_frequency_hz", float, "Hz"),
+}
+"""Rig method -> key of :attr:`RigSession.commanded`, conversion to the window's unit, that unit."""
 
 
 def _event_text(event: SweepEvent) -> str:

@@ -2,7 +2,7 @@
 
 import pytest
 
-from ornitail.acquisition.sweep import RecordConditions
+from ornitail.acquisition.set_point_recording import RecordConditions
 
 
 def test_a_creeping_velocity_is_taken_at_the_records_middle_not_at_the_readings_mean():

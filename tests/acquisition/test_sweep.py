@@ -10,7 +10,7 @@ import threading
 import numpy as np
 import pytest
 
-from ornitail.acquisition import live_balance, sweep
+from ornitail.acquisition import live_balance, set_point_recording
 from ornitail.acquisition.catalog import RunCatalog
 from ornitail.acquisition.instrument_errors import InstrumentError
 from ornitail.acquisition.recording_reader import load_recording
@@ -285,7 +285,7 @@ def test_a_record_kept_with_a_gap_is_journalled_and_refused_by_processing(
     """With no retakes allowed the first measurement keeps its gap: the journal says how many samples it lost, the
     sweep ends incomplete naming it, and processing names the run and the set point instead of timing cycles
     across the gap."""
-    monkeypatch.setattr(sweep, "MAX_RETAKES", 0)
+    monkeypatch.setattr(set_point_recording, "MAX_RETAKES", 0)
     on_event, dropping = drops_after_the_first_point_settles(simulated_rig, kind="measurement")
     result = run_sweep(short_plan(), simulated_rig, tmp_path, on_event=on_event)
     assert result.status == "incomplete" and dropping.wait(timeout=30)

@@ -18,7 +18,8 @@ from ornitail.acquisition import catalog_sync
 from ornitail.acquisition.catalog import CATALOG_FILE_NAME, RunCatalog
 from ornitail.acquisition.live_balance import LiveBalance
 from ornitail.acquisition.recording_reader import load_recording
-from ornitail.acquisition.sweep import MAX_RETAKES, run_sweep
+from ornitail.acquisition.set_point_recording import MAX_RETAKES
+from ornitail.acquisition.sweep import run_sweep
 from ornitail.acquisition.sweep_plan import plan_from_document
 from ornitail.app.cli import main
 from ornitail.app.sweep_session import EXIT_INCOMPLETE, exit_code_of, sweep_result_record

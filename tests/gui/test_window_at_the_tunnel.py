@@ -40,8 +40,13 @@ def test_tare_record_and_cycle_view_make_a_processable_manual_run(
         lambda: abs(math.degrees(window.session.readings.pitch_rad) - 25) < 0.2, timeout=20_000
     )
     controls.record_s.setValue(0.5)
+    # A point before the run has a tare at this pitch is refused, saying why (processing could not use it).
+    controls.point_button.click()
+    qtbot.waitUntil(lambda: bool(window.log.problems), timeout=10_000)
+    assert "no wind-off tare at theta = 25.00 deg" in window.log.problems[-1]
+    assert window.session.recording.points == 0
     controls.tare_button.click()
-    qtbot.waitUntil(lambda: "wind-off tare at theta" in window.log.toPlainText(), timeout=20_000)
+    qtbot.waitUntil(lambda: "samples (in run" in window.log.toPlainText(), timeout=20_000)
     assert window.session.tare_volts.shape == (6,)
     assert "over 5000 samples" in window.log.toPlainText()  # 0.5 s at 10 kHz
     drive_to(window, 25.0, 0.8, 13.5)
@@ -80,7 +85,7 @@ def test_a_frozen_window_loses_no_recorded_sample(connected, qtbot, tmp_path):
     window.controls.start_button.click()
     qtbot.waitUntil(lambda: window.session.recording is not None, timeout=10_000)
     window.controls.record_s.setValue(1.0)
-    window.controls.point_button.click()
+    window.controls.tare_button.click()  # a tare is recorded into the run like any point
     time.sleep(1.5)  # the GUI thread is blocked: no redraw, no event handling
     qtbot.waitUntil(lambda: window.session.recording.points == 1, timeout=20_000)
     assert window.session.live.health().recorder_lost_samples == 0
