@@ -26,15 +26,20 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
-from ornitail.acquisition.flapping_motor_driver import FlappingMotorDriver
+from ornitail.acquisition.actuator_backends import create_actuator
+from ornitail.acquisition.actuator_interfaces import (
+    ActuatorContext,
+    FlappingMotor,
+    PitchStrut,
+    TunnelFan,
+)
+from ornitail.acquisition.fan_speed_map import FanSpeedMap
 from ornitail.acquisition.instrument_errors import InstrumentError
 from ornitail.acquisition.netcanoem_driver import NetCanOemDriver
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, RigDescription, read_rig_file
 from ornitail.acquisition.rig_simulator_server import SimulatorControl
 from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
 from ornitail.acquisition.simulated_rig_instruments import SimulatedRigInstruments
-from ornitail.acquisition.strut_pitch_driver import StrutPitchDriver
-from ornitail.acquisition.tunnel_fan_driver import TunnelFanDriver
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.calibration.tunnel_table import TunnelVelocityTable
 from ornitail.core.errors import UserInputError, require_finite
@@ -56,7 +61,9 @@ class Rig:
         The balance calibration named by ``[balance].calibration``.
     tunnel_table : TunnelVelocityTable
         Fan rpm to velocity, from ``[tunnel].table``.
-    fan, strut, motor : drivers, set by :meth:`connect`.
+    fan, strut, motor : TunnelFan, PitchStrut, FlappingMotor
+        The actuators (whatever backend ``[fan].backend`` etc. chose), set by :meth:`connect`; the rig calls
+        them only through these interfaces (:mod:`actuator_interfaces`).
     balance : SerialDaqDriver | NetCanOemDriver, by ``[balance].route``, set by :meth:`connect`.
     simulators : SimulatedRigInstruments | None
         The running simulators of a simulated rig (fault injection in tests), else None.
@@ -81,10 +88,11 @@ class Rig:
                 f"tunnel table's range {table_low:g}..{table_high:g} m/s "
                 f"({description.tunnel_table_path})",
             )
-        self.max_fan_rpm = float(self.tunnel_table.rpm_for_velocity(limits.velocity_max_m_s))
-        self.fan: TunnelFanDriver | None = None
-        self.strut: StrutPitchDriver | None = None
-        self.motor: FlappingMotorDriver | None = None
+        self.speed_map = FanSpeedMap(self.tunnel_table)
+        self.max_fan_rpm = self.speed_map.rpm_for_velocity(limits.velocity_max_m_s)
+        self.fan: TunnelFan | None = None
+        self.strut: PitchStrut | None = None
+        self.motor: FlappingMotor | None = None
         self.balance: SerialDaqDriver | NetCanOemDriver | None = None
         self.simulators: SimulatedRigInstruments | None = None
         self.simulator_control: SimulatorControl | None = None
@@ -152,12 +160,11 @@ class Rig:
 
     def create_drivers(
         self,
-    ) -> tuple[
-        TunnelFanDriver, FlappingMotorDriver, StrutPitchDriver, SerialDaqDriver | NetCanOemDriver
-    ]:
+    ) -> tuple[TunnelFan, FlappingMotor, PitchStrut, SerialDaqDriver | NetCanOemDriver]:
         """Create (not open) the fan, motor, strut and balance drivers on the rig file's ports, or on the
         simulators' ptys and virtual CAN channel once :meth:`start_simulation` started them; they become
-        :attr:`fan`, :attr:`motor`, :attr:`strut` and :attr:`balance`, which :meth:`close` makes safe and closes."""
+        :attr:`fan`, :attr:`motor`, :attr:`strut` and :attr:`balance`, which :meth:`close` makes safe and closes.
+        Each actuator is built by the backend its rig-file section names (:mod:`actuator_backends`)."""
         description = self.description
         ports = {
             "fan": description.fan.port,
@@ -168,31 +175,33 @@ class Rig:
         can_interface, can_channel = description.can.interface, description.can.channel
         if self.simulators is not None:
             simulators = self.simulators
-            ports.update(
-                fan=simulators.fan.port_path,
-                strut=simulators.strut.port_path,
-                motor=simulators.motor.port_path,
-            )
+            ports.update(simulators.actuator_ports())
             if simulators.daq_board is not None:
                 ports["daq"] = simulators.daq_board.port_path
             can_interface, can_channel = "virtual", simulators.can_channel or can_channel
         simulated = description.simulated or description.simulator_control is not None
         reply_timeout_s = SIMULATED_REPLY_TIMEOUT_S if simulated else REPLY_TIMEOUT_S
-        limits = description.limits
-        self.fan = TunnelFanDriver(
-            ports["fan"], max_rpm=self.max_fan_rpm, baud=description.fan.baud
-        )
-        self.motor = FlappingMotorDriver(
-            ports["motor"], max_rpm=limits.max_motor_rpm, baud=description.motor.baud
-        )
-        self.strut = StrutPitchDriver(
-            ports["strut"],
-            pitch_min_rad=limits.pitch_min_rad,
-            pitch_max_rad=limits.pitch_max_rad,
-            baud=description.strut.baud,
-        )
-        for driver in (self.fan, self.motor, self.strut):
-            driver.connection.reply_timeout_s = reply_timeout_s
+
+        def actuator(role: str, name: str) -> Any:
+            settings = getattr(description, role)
+            context = ActuatorContext(
+                name=name,
+                port=ports[role],
+                baud=settings.baud,
+                reply_timeout_s=reply_timeout_s,
+                settings=settings.settings,
+                limits=description.limits,
+                tunnel_table=self.tunnel_table,
+                max_fan_rpm=self.max_fan_rpm,
+                rig_file=description.path,
+            )
+            return create_actuator(
+                role, settings.backend_class, context, f"{description.path}: [{role}].backend"
+            )
+
+        self.fan = actuator("fan", "tunnel fan")
+        self.motor = actuator("motor", "flapping motor")
+        self.strut = actuator("strut", "strut pitch actuator")
         if description.balance_route == "serial_daq":
             self.balance = SerialDaqDriver(
                 ports["daq"], baud=description.serial_daq.baud, reply_timeout_s=reply_timeout_s
@@ -222,7 +231,7 @@ class Rig:
         outcome: dict[str, str] = {}
         for driver in drivers:
             outcome[driver.name] = "not connected"
-            if driver.connection.is_open:
+            if driver.is_open:
                 try:
                     driver.safe_state()
                     outcome[driver.name] = "safe"
@@ -288,15 +297,11 @@ class Rig:
                 f"{limits.velocity_max_m_s:g} m/s "
                 f"([limits].velocity_m_s in {self.description.path})",
             )
-        self._connected(self.fan).set_rpm(float(self.tunnel_table.rpm_for_velocity(velocity_m_s)))
+        self._connected(self.fan).set_velocity(velocity_m_s)
 
     def read_tunnel_velocity_m_s(self) -> float:
-        """Jet velocity from the measured fan rpm and the tunnel table, m/s."""
-        rpm = self._connected(self.fan).read_rpm()
-        rpm = min(
-            max(rpm, float(self.tunnel_table.fan_rpm[0])), float(self.tunnel_table.fan_rpm[-1])
-        )
-        return float(self.tunnel_table.velocity_m_s_at_rpm(rpm))
+        """Jet velocity from the measured fan speed (or drive frequency) and the tunnel table, m/s."""
+        return self._connected(self.fan).read_velocity_m_s()
 
     def set_pitch(self, pitch_rad: float) -> None:
         """Set the strut pitch angle, rad (limits checked by the strut driver)."""
@@ -343,8 +348,8 @@ class Rig:
 
     def recording_description(self) -> dict[str, Any]:
         """What a recording stores about this rig (JSON-serialisable): name, file, simulated, time scale,
-        balance route, tool transform (mm, deg) and the motor's gear ratio (motor turns per flap, for the
-        frequency cross-check in processing)."""
+        balance route, tool transform (mm, deg), the motor's gear ratio (motor turns per flap, for the
+        frequency cross-check in processing) and the backend of each actuator (``{"fan": "modbus_vfd", ...}``)."""
         description = self.description
         return {
             "name": description.name,
@@ -354,6 +359,9 @@ class Rig:
             "balance_route": description.balance_route,
             "tool_transform_mm_deg": list(description.tool_transform.as_mm_deg()),
             "gear_ratio": description.gear_ratio,
+            "actuator_backends": {
+                role: getattr(description, role).backend for role in ("fan", "strut", "motor")
+            },
         }
 
     def calibration_files(self) -> dict[str, Path]:

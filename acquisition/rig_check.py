@@ -10,7 +10,6 @@ other's commands). The result is plain data (:class:`RigCheck`); ``ornitail rig 
 
 from __future__ import annotations
 
-import math
 import sys
 import time
 from collections.abc import Callable
@@ -20,17 +19,16 @@ from pathlib import Path
 import can
 from serial.tools import list_ports
 
+from ornitail.acquisition.actuator_interfaces import Actuator
 from ornitail.acquisition.daq_protocol import CHANNEL_NAMES
 from ornitail.acquisition.instrument_errors import (
     InstrumentDisconnected,
     InstrumentError,
     InstrumentInUse,
 )
-from ornitail.acquisition.line_instrument_driver import LineInstrumentDriver
 from ornitail.acquisition.netcanoem_driver import NetCanOemDriver
 from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
-from ornitail.acquisition.strut_pitch_driver import StrutPitchDriver
 
 FIRST_SAMPLE_TIMEOUT_S = 5.0
 """How long the DAQ board may take to deliver its first sample after ``START``, s."""
@@ -188,19 +186,10 @@ def _check_instruments(rig: Rig) -> list[InstrumentCheck]:
         balance_check = _check_netcanoem(balance)
     return [
         balance_check,
-        _check_line_instrument(fan, "[fan].port", lambda: {"fan_rpm": fan.read_rpm()}),
-        _check_line_instrument(strut, "[strut].port", lambda: _strut_reading(strut)),
-        _check_line_instrument(motor, "[motor].port", lambda: {"motor_rpm": motor.read_rpm()}),
+        _check_actuator(fan, "[fan].port"),
+        _check_actuator(strut, "[strut].port"),
+        _check_actuator(motor, "[motor].port"),
     ]
-
-
-def _strut_reading(strut: StrutPitchDriver) -> Reading:
-    return {"pitch_deg": math.degrees(strut.read_pitch_rad()), "homed": strut.status().homed}
-
-
-def _identity_fields(reply: str) -> dict[str, str]:
-    """``ID model=ORNI-FAN serial=SIM00001 firmware=1.0.0`` -> ``{"model": "ORNI-FAN", ...}``."""
-    return dict(word.split("=", 1) for word in reply.split()[1:] if "=" in word)
 
 
 def _refused(route: str, key: str, name: str, error: InstrumentError) -> InstrumentCheck:
@@ -225,32 +214,34 @@ def _read_then_make_safe(
     return reading, "; ".join(problems) or None
 
 
-def _check_line_instrument(
-    driver: LineInstrumentDriver, key: str, read: Callable[[], Reading]
-) -> InstrumentCheck:
-    """``ID?``, one reading, the safe-state command (STOP, HALT, OFF), close."""
-    route = driver.connection.port
+def _check_actuator(driver: Actuator, key: str) -> InstrumentCheck:
+    """Open and identify (ORNI ``ID?``, Modbus frequency registers, Zaber ``get device.id``), one reading, the safe
+    state (stop, hold, off), close; whatever the backend, through the actuator interface."""
+    route = driver.route
     try:
         reply = driver.open()
     except InstrumentError as error:
         return _refused(route, key, driver.name, error)
     try:
-        fields = _identity_fields(reply)
-        identity = " ".join(f"{name}={value}" for name, value in fields.items()) or reply
-        expected = driver.model
-        if fields.get("model") != expected:
-            problem = (
-                f"{route} answers as {fields.get('model', reply)!r}, not {expected}: "
-                f"is {key} the port of another instrument?"
-            )
+        identity = identity_text(reply)
+        problem = driver.identity_problem(reply, key)
+        if problem is not None:
             return InstrumentCheck(
                 driver.name, key, route, STATUS_FAILED, identity, problem=problem
             )
-        reading, problem = _read_then_make_safe(read, driver.safe_state)
+        reading, problem = _read_then_make_safe(driver.check_reading, driver.safe_state)
     finally:
         driver.close()
     status = STATUS_FAILED if problem else STATUS_OK
     return InstrumentCheck(driver.name, key, route, status, identity, reading, problem)
+
+
+def identity_text(reply: str) -> str:
+    """``ID model=ORNI-FAN serial=SIM00001`` -> ``model=ORNI-FAN serial=SIM00001``; other identities unchanged."""
+    fields = dict(word.split("=", 1) for word in reply.split()[1:] if "=" in word)
+    if reply.startswith("ID") and fields:
+        return " ".join(f"{name}={value}" for name, value in fields.items())
+    return reply
 
 
 def _check_daq_board(board: SerialDaqDriver, sample_rate_hz: float) -> InstrumentCheck:

@@ -12,8 +12,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from ornitail.acquisition.actuator_backends import DEFAULT_BACKEND, backend_class
+from ornitail.acquisition.actuator_interfaces import Actuator
 from ornitail.acquisition.daq_protocol import DEFAULT_BAUD, link_ceiling_frames_per_s
-from ornitail.acquisition.line_instrument_connection import DEFAULT_LINE_BAUD
 from ornitail.acquisition.netcanoem_protocol import DEFAULT_BASE_ID, gauge_sample_rate_ceiling_hz
 from ornitail.calibration.tool_transform import ToolTransform
 from ornitail.core.errors import UserInputError
@@ -34,9 +35,9 @@ _ALLOWED_KEYS = {
     "balance.serial_daq": {"port", "baud", "sample_rate_hz"},
     "balance.can": {"interface", "channel", "bit_rate", "base_id", "sample_rate_hz"},
     "tunnel": {"table"},
-    "fan": {"port", "baud"},
-    "strut": {"port", "baud"},
-    "motor": {"port", "baud", "gear_ratio"},
+    "fan": {"port", "baud", "backend"},
+    "strut": {"port", "baud", "backend"},
+    "motor": {"port", "baud", "backend", "gear_ratio"},
     "limits": {"pitch_deg", "velocity_m_s", "flapping_frequency_hz", "max_motor_rpm"},
 }
 _REQUIRED_SECTIONS = ("rig", "balance", "tunnel", "fan", "strut", "motor", "limits")
@@ -63,11 +64,15 @@ class CanSettings:
 
 
 @dataclass(frozen=True)
-class LinePortSettings:
-    """Port and baud of a line-protocol instrument (fan, strut, motor)."""
+class ActuatorSettings:
+    """``[fan]``, ``[strut]`` or ``[motor]``: port, baud, backend name and class, and the backend's checked
+    sub-table (``[fan.modbus]``; None for a backend without one)."""
 
     port: str
     baud: int
+    backend: str
+    backend_class: type[Actuator]
+    settings: Any = None
 
 
 @dataclass(frozen=True)
@@ -98,9 +103,9 @@ class RigDescription:
     serial_daq: SerialDaqSettings
     can: CanSettings
     tunnel_table_path: Path
-    fan: LinePortSettings
-    strut: LinePortSettings
-    motor: LinePortSettings
+    fan: ActuatorSettings
+    strut: ActuatorSettings
+    motor: ActuatorSettings
     gear_ratio: float
     limits: SafetyLimits
     simulator_control: Path | None = None
@@ -115,6 +120,43 @@ def _fields(path: Path, section: str, table: Any) -> TomlTable:
 def _tool_transform(table: TomlTable, key: str) -> ToolTransform:
     values = table.numbers(key, 6, "[dx, dy, dz (mm), rx, ry, rz (deg)]", default=[0.0] * 6)
     return ToolTransform.from_mm_deg(*values)
+
+
+def _actuator(
+    path: Path, role: str, table: Any, simulated: bool
+) -> tuple[TomlTable, ActuatorSettings]:
+    """``[fan]``, ``[strut]`` or ``[motor]``: the backend named (built-in or installed), then the keys it allows
+    (its own sub-table, e.g. ``[fan.modbus]``, checked by the backend class)."""
+    everything = table if isinstance(table, dict) else {}
+    backend_name = TomlTable(path, role, table, everything).text("backend", DEFAULT_BACKEND)
+    where = f"{path}: [{role}].backend"
+    backend = backend_class(role, backend_name, where)
+    sub_table = backend.settings_table
+    fields = TomlTable(
+        path, role, table, _ALLOWED_KEYS[role] | ({sub_table} if sub_table else set())
+    )
+    settings = None
+    if sub_table:
+        raw = fields.table.get(sub_table, {})
+        sub_fields = TomlTable(path, f"{role}.{sub_table}", raw, backend.settings_keys)
+        try:
+            settings = backend.read_settings(sub_fields)
+        except UserInputError:
+            raise
+        except (
+            Exception
+        ) as error:  # a third party's settings reader failing: one line, not its traceback
+            raise UserInputError(
+                f"{path}: [{role}.{sub_table}]",
+                f"backend {backend_name!r} could not read it: {type(error).__name__}: {error}",
+            ) from None
+    return fields, ActuatorSettings(
+        port=fields.text("port", "simulated" if simulated else REQUIRED),
+        baud=fields.integer("baud", backend.default_baud, minimum=MIN_BAUD, maximum=MAX_BAUD),
+        backend=backend_name,
+        backend_class=backend,
+        settings=settings,
+    )
 
 
 def read_rig_file(path: str | Path) -> RigDescription:
@@ -171,16 +213,10 @@ def read_rig_file(path: str | Path) -> RigDescription:
             f"samples/s at {can_settings.bit_rate} bit/s",
         )
     tunnel = _fields(path, "tunnel", document["tunnel"])
-    fan = _fields(path, "fan", document["fan"])
-    strut = _fields(path, "strut", document["strut"])
-    motor = _fields(path, "motor", document["motor"])
+    fan, fan_settings = _actuator(path, "fan", document["fan"], simulated)
+    strut, strut_settings = _actuator(path, "strut", document["strut"], simulated)
+    motor, motor_settings = _actuator(path, "motor", document["motor"], simulated)
     limits = _fields(path, "limits", document["limits"])
-
-    def line_port(fields: TomlTable) -> LinePortSettings:
-        return LinePortSettings(
-            port=fields.text("port", "simulated" if simulated else REQUIRED),
-            baud=fields.integer("baud", DEFAULT_LINE_BAUD, minimum=MIN_BAUD, maximum=MAX_BAUD),
-        )
 
     pitch_min_deg, pitch_max_deg = limits.interval("pitch_deg")
     velocity_min, velocity_max = limits.interval("velocity_m_s")
@@ -205,9 +241,9 @@ def read_rig_file(path: str | Path) -> RigDescription:
         serial_daq=serial_daq,
         can=can_settings,
         tunnel_table_path=tunnel.file("table"),
-        fan=line_port(fan),
-        strut=line_port(strut),
-        motor=line_port(motor),
+        fan=fan_settings,
+        strut=strut_settings,
+        motor=motor_settings,
         gear_ratio=motor.number("gear_ratio", DELFLY_GEAR_RATIO, positive=True),
         limits=SafetyLimits(
             pitch_min_rad=math.radians(pitch_min_deg),

@@ -91,6 +91,14 @@ class RigSimulatorServer:
                 "the rig simulator server serves the serial DAQ route only (python-can's virtual bus does not "
                 'cross processes); use route = "serial_daq"',
             )
+        for role in ("fan", "strut", "motor"):
+            backend = getattr(description, role).backend
+            if backend != "orni_line":
+                raise UserInputError(
+                    f"{description.path}: [{role}].backend",
+                    f"the rig simulator server serves the orni_line backends only (not yet {backend!r}); "
+                    "simulate this rig in-process with [rig].simulated = true",
+                )
         self.description = description
         self.control_path = control_path
         self.instruments = SimulatedRigInstruments.start(

@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
+import termios
 import time
 from dataclasses import dataclass
 
@@ -52,9 +53,16 @@ def _reason(error: BaseException) -> str:
 
 
 def open_serial_exclusively(
-    port: str, baud: int, instrument_name: str, *, timeout_s: float = 0.05
+    port: str,
+    baud: int,
+    instrument_name: str,
+    *,
+    timeout_s: float = 0.05,
+    parity: str = serial.PARITY_NONE,
+    stop_bits: int = 1,
 ) -> tuple[serial.Serial, ExclusiveLock | None]:
-    """Open ``port`` for ``instrument_name`` with the port's lock file and pyserial's exclusive flag.
+    """Open ``port`` for ``instrument_name`` with the port's lock file and pyserial's exclusive flag
+    (8 data bits, ``parity`` as pyserial's ``"N"``/``"E"``/``"O"``, ``stop_bits`` 1 or 2).
 
     Raises
     ------
@@ -76,8 +84,16 @@ def open_serial_exclusively(
     except OSError:  # the lock folder is unusable: pyserial's own lock on the device still applies
         lock = None
     try:
-        connection = serial.Serial(port, baud, timeout=timeout_s, write_timeout=1.0, exclusive=True)
-    except (OSError, ValueError) as error:
+        connection = serial.Serial(
+            port,
+            baud,
+            parity=parity,
+            stopbits=stop_bits,
+            timeout=timeout_s,
+            write_timeout=1.0,
+            exclusive=True,
+        )
+    except (OSError, ValueError, termios.error) as error:  # termios.error: line settings refused
         if lock is not None:
             lock.release()
         if getattr(error, "errno", None) in (errno.EAGAIN, errno.EWOULDBLOCK):

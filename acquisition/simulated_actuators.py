@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+from ornitail.acquisition.fan_speed_map import FanSpeedMap
 from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
 from ornitail.acquisition.simulated_clock import SimulatedClock
 from ornitail.acquisition.simulated_line_instrument import SimulatedLineInstrument, first_order_step
@@ -45,6 +46,7 @@ class SimulatedTunnelFan(SimulatedLineInstrument):
         super().__init__(clock, **kwargs)
         self.signals = signals
         self.tunnel_table = tunnel_table
+        self._speed_map = FanSpeedMap(tunnel_table)
         self.device_max_rpm = float(
             device_max_rpm if device_max_rpm is not None else tunnel_table.fan_rpm[-1]
         )
@@ -55,11 +57,8 @@ class SimulatedTunnelFan(SimulatedLineInstrument):
         self._publish()
 
     def _publish(self) -> None:
-        rpm = min(
-            max(self.rpm, float(self.tunnel_table.fan_rpm[0])), float(self.tunnel_table.fan_rpm[-1])
-        )
         self.signals.set_operating_point(
-            tunnel_velocity_m_s=self.tunnel_table.velocity_m_s_at_rpm(rpm)
+            tunnel_velocity_m_s=self._speed_map.velocity_for_rpm(self.rpm)
         )
 
     def advance(self, dt_s: float) -> None:

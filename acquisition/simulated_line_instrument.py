@@ -66,8 +66,8 @@ class SimulatedLineInstrument(SimulatedDevice):
         """Reply to ``ID?``."""
         return f"ID model={self.model} serial={self.serial_number} firmware=1.0.0"
 
-    def handle(self, command: str) -> str:
-        """Answer one command line (subclasses); return the reply line without newline."""
+    def handle(self, command: str) -> str | None:
+        """Answer one command line (subclasses); return the reply line without newline (None: no reply)."""
         raise NotImplementedError
 
     def advance(self, dt_s: float) -> None:
@@ -97,7 +97,8 @@ class SimulatedLineInstrument(SimulatedDevice):
                         reply = (
                             self.identity_reply() if text.upper() == "ID?" else self.handle(text)
                         )
-                        outgoing += reply.encode("ascii") + b"\n"
+                        if reply is not None:  # None: a message the instrument ignores
+                            outgoing += reply.encode("ascii") + b"\n"
             while outgoing:
                 written = self._pty.write_some(outgoing)
                 if written == 0:

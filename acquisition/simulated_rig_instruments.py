@@ -2,6 +2,9 @@
 
 All share one :class:`SimulatedClock` (so one time scale) and one :class:`SharedTunnelSignals`:
 the fan, strut and motor set its operating point, the balance board (DAQ or NETCANOEM) reads it.
+Each actuator's simulator is the one of its rig-file backend: the ORNI line instruments for ``orni_line``, a Modbus
+RTU drive for ``modbus_vfd``, a Zaber ASCII controller for ``zaber_ascii``. A third-party backend has no simulator
+here: its driver is given the rig file's port.
 """
 
 from __future__ import annotations
@@ -9,6 +12,9 @@ from __future__ import annotations
 import uuid
 from dataclasses import dataclass
 
+from ornitail.acquisition.fan_speed_map import FanSpeedMap
+from ornitail.acquisition.modbus_vfd_driver import MODBUS_VFD
+from ornitail.acquisition.orni_line_backends import ORNI_LINE
 from ornitail.acquisition.rig_file import RigDescription
 from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
 from ornitail.acquisition.simulated_actuators import (
@@ -18,7 +24,11 @@ from ornitail.acquisition.simulated_actuators import (
 )
 from ornitail.acquisition.simulated_clock import SimulatedClock
 from ornitail.acquisition.simulated_daq_board import SimulatedDaqBoard
+from ornitail.acquisition.simulated_device import SimulatedDevice
+from ornitail.acquisition.simulated_modbus_vfd import SimulatedModbusVfd
 from ornitail.acquisition.simulated_netcanoem_board import SimulatedNetCanOemBoard
+from ornitail.acquisition.simulated_zaber_strut import SimulatedZaberStrut
+from ornitail.acquisition.zaber_strut_driver import ZABER_ASCII
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.calibration.tunnel_table import TunnelVelocityTable
 
@@ -27,13 +37,14 @@ SIMULATION_SAMPLE_RATE_HZ = 10_000.0
 
 @dataclass
 class SimulatedRigInstruments:
-    """The running simulators of one rig; ``daq_board`` or ``netcanoem_board`` is None by route."""
+    """The running simulators of one rig; ``daq_board`` or ``netcanoem_board`` is None by route, an actuator's
+    simulator None when its backend has none here (a third party's)."""
 
     clock: SimulatedClock
     signals: SharedTunnelSignals
-    fan: SimulatedTunnelFan
-    strut: SimulatedStrutActuator
-    motor: SimulatedFlappingMotor
+    fan: SimulatedTunnelFan | SimulatedModbusVfd | None
+    strut: SimulatedStrutActuator | SimulatedZaberStrut | None
+    motor: SimulatedFlappingMotor | None
     daq_board: SimulatedDaqBoard | None
     netcanoem_board: SimulatedNetCanOemBoard | None
     can_channel: str | None
@@ -52,14 +63,15 @@ class SimulatedRigInstruments:
         )
         started: list = []
         try:
-            fan = SimulatedTunnelFan(clock, signals, tunnel_table).start()
+            fan = _fan_simulator(description, clock, signals, tunnel_table)
             started.append(fan)
-            strut = SimulatedStrutActuator(clock, signals).start()
+            strut = _strut_simulator(description, clock, signals)
             started.append(strut)
-            motor = SimulatedFlappingMotor(
-                clock, signals, gear_ratio=description.gear_ratio
-            ).start()
+            motor = None
+            if description.motor.backend == ORNI_LINE:
+                motor = SimulatedFlappingMotor(clock, signals, gear_ratio=description.gear_ratio)
             started.append(motor)
+            started = [simulator.start() for simulator in started if simulator is not None]
             daq_board = netcanoem_board = can_channel = None
             if description.balance_route == "serial_daq":
                 daq_board = SimulatedDaqBoard(
@@ -82,12 +94,46 @@ class SimulatedRigInstruments:
                 started.append(netcanoem_board)
         except BaseException:
             for simulator in reversed(started):
-                simulator.close()
+                if simulator is not None:
+                    simulator.close()
             raise
         return cls(clock, signals, fan, strut, motor, daq_board, netcanoem_board, can_channel)
+
+    def actuator_ports(self) -> dict[str, str]:
+        """The pty of each actuator that has a simulator, by role (``{"fan": "/dev/pts/5", ...}``)."""
+        simulators = {"fan": self.fan, "strut": self.strut, "motor": self.motor}
+        return {role: sim.port_path for role, sim in simulators.items() if sim is not None}
 
     def close(self) -> None:
         """Stop every simulator."""
         for simulator in (self.daq_board, self.netcanoem_board, self.motor, self.strut, self.fan):
             if simulator is not None:
                 simulator.close()
+
+
+def _fan_simulator(
+    description: RigDescription,
+    clock: SimulatedClock,
+    signals: SharedTunnelSignals,
+    tunnel_table: TunnelVelocityTable,
+) -> SimulatedDevice | None:
+    backend = description.fan.backend
+    if backend == ORNI_LINE:
+        return SimulatedTunnelFan(clock, signals, tunnel_table)
+    if backend == MODBUS_VFD:
+        settings = description.fan.settings
+        return SimulatedModbusVfd(
+            clock, signals, FanSpeedMap(tunnel_table, settings.fan_rpm_per_hz), settings
+        )
+    return None
+
+
+def _strut_simulator(
+    description: RigDescription, clock: SimulatedClock, signals: SharedTunnelSignals
+) -> SimulatedDevice | None:
+    backend = description.strut.backend
+    if backend == ORNI_LINE:
+        return SimulatedStrutActuator(clock, signals)
+    if backend == ZABER_ASCII:
+        return SimulatedZaberStrut(clock, signals, description.strut.settings)
+    return None
