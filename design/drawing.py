@@ -49,8 +49,9 @@ def base_tail_outline_mm() -> np.ndarray:
     return v[order]
 
 
-def draw_planform(geometry: TailGeometry, title: str, svg_path: Path, png_path: Path) -> None:
-    """Draw the planform (solid) over the base tail (dashed), mm axes, as SVG and PNG."""
+def planform_figure(geometry: TailGeometry, title: str) -> plt.Figure:
+    """The planform (solid) over the base tail (dashed), mm axes; the legend sits below the axes,
+    clear of both outlines."""
     outline = planform_outline_mm(geometry)
     base = base_tail_outline_mm()
     figure, axes = plt.subplots(figsize=(7, 4))
@@ -62,11 +63,17 @@ def draw_planform(geometry: TailGeometry, title: str, svg_path: Path, png_path: 
     axes.invert_yaxis()
     axes.set_aspect("equal")
     axes.grid(True, alpha=0.3)
-    axes.legend(loc="lower right")
+    axes.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2, frameon=False)
     axes.set_title(title)
     figure.tight_layout()
-    figure.savefig(svg_path)
-    figure.savefig(png_path, dpi=120)
+    return figure
+
+
+def draw_planform(geometry: TailGeometry, title: str, svg_path: Path, png_path: Path) -> None:
+    """Draw the planform (solid) over the base tail (dashed), mm axes, as SVG and PNG."""
+    figure = planform_figure(geometry, title)
+    figure.savefig(svg_path, bbox_inches="tight")
+    figure.savefig(png_path, dpi=120, bbox_inches="tight")
     plt.close(figure)
 
 

@@ -16,17 +16,17 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ornitail.core.errors import UserInputError  # noqa: E402
-from ornitail.design.proposal import (  # noqa: E402
+from ornitail.core.errors import UserInputError
+from ornitail.design.design_evaluation import DesignEvaluation
+from ornitail.design.pareto_plots import write_pareto_picture
+from ornitail.design.proposal import (
     DesignTargets,
     ProposalProblem,
     SolveSettings,
@@ -120,10 +120,22 @@ def pareto_front(
     return points
 
 
-def write_front(points: list[ParetoPoint], kind: str, directory: Path) -> dict[str, str]:
-    """Write the front as pareto.csv (mm, cm^2, deg columns) and pareto.png/svg; return the paths."""
+def write_front(
+    points: list[ParetoPoint],
+    kind: str,
+    directory: Path,
+    evaluations: Sequence[DesignEvaluation] | None = None,
+) -> dict[str, str]:
+    """Write the front as pareto.csv (mm, cm^2, deg columns; the damping ratio's sigmas of the mean trend
+    and of a new flight when ``evaluations`` are given) and pareto.png/pdf/svg with its 95 % damping band
+    (design/pareto_plots.py); return the paths."""
     directory.mkdir(parents=True, exist_ok=True)
     table = directory / "pareto.csv"
+    sigmas = (
+        [(e.damping_ratio.sigma_mean, e.damping_ratio.sigma_new) for e in evaluations]
+        if evaluations
+        else [(math.nan, math.nan)] * len(points)
+    )
     with table.open("w", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(
@@ -136,39 +148,24 @@ def write_front(points: list[ParetoPoint], kind: str, directory: Path) -> dict[s
                 "x_h_mm",
                 "s_cm2",
                 "damping_ratio",
+                "damping_ratio_sigma_mean",
+                "damping_ratio_sigma_new",
                 "v_ss_m_s",
                 "theta_ss_deg",
             ]
         )
-        for p in points:
+        for p, (sigma_mean, sigma_new) in zip(points, sigmas, strict=True):
             writer.writerow(
                 [
                     f"{p.epsilon:.6g}",
                     *(f"{v * 1e3:.2f}" for v in p.geometry_vector_m),
                     f"{p.area_m2 * 1e4:.3f}",
                     f"{p.damping_ratio:.5f}",
+                    f"{sigma_mean:.5f}",
+                    f"{sigma_new:.5f}",
                     f"{p.v_ss_m_s:.4f}",
                     f"{np.degrees(p.theta_ss_rad):.3f}",
                 ]
             )
-    figure, axes = plt.subplots(figsize=(6, 4))
-    if kind == "area-damping":
-        axes.plot([p.damping_ratio for p in points], [p.area_m2 * 1e4 for p in points], "o-")
-        axes.set_xlabel("damping ratio of the pitch oscillation (-)")
-        axes.set_ylabel("minimum tail area S (cm^2)")
-    else:
-        axes.plot([p.v_ss_m_s for p in points], [p.damping_ratio for p in points], "o-")
-        axes.set_xlabel("steady airspeed V_ss (m/s)")
-        axes.set_ylabel("maximum damping ratio (-)")
-    axes.grid(True, alpha=0.3)
-    axes.set_title(f"trade-off front ({kind})")
-    figure.tight_layout()
-    paths = {
-        "table_csv": table,
-        "plot_png": directory / "pareto.png",
-        "plot_svg": directory / "pareto.svg",
-    }
-    figure.savefig(paths["plot_png"], dpi=120)
-    figure.savefig(paths["plot_svg"])
-    plt.close(figure)
+    paths = {"table_csv": table, **write_pareto_picture(points, kind, directory, evaluations)}
     return {name: str(path) for name, path in paths.items()}

@@ -84,14 +84,13 @@ def _time_panels(count: int) -> tuple[plt.Figure, np.ndarray]:
     return figure, axes[:, 0]
 
 
-def compare_picture(
+def compare_figure(
     time_s: np.ndarray,
     measured: np.ndarray,
     simulated: np.ndarray,
     labels: dict[str, str],
     fit: dict[str, float],
-    directory: Path,
-) -> list[Path]:
+) -> plt.Figure:
     """Measured and simulated output over time (s), one panel per output with its fit."""
     figure, axes = _time_panels(len(labels))
     for index, (axis, output) in enumerate(zip(axes, labels, strict=True)):
@@ -100,13 +99,27 @@ def compare_picture(
         axis.set_title(f"{output}: fit (1 - NRMSE) {fit[output]:.3f}")
         axis.set_ylabel(labels[output])
     axes[0].legend(loc="best")
+    figure.suptitle("measured and model outputs", fontsize=10)
     figure.tight_layout()
+    return figure
+
+
+def compare_picture(
+    time_s: np.ndarray,
+    measured: np.ndarray,
+    simulated: np.ndarray,
+    labels: dict[str, str],
+    fit: dict[str, float],
+    directory: Path,
+) -> list[Path]:
+    """Write :func:`compare_figure` as ``compare.png`` and ``.pdf``; return the paths."""
+    figure = compare_figure(time_s, measured, simulated, labels, fit)
     return save_picture(figure, directory, COMPARE_FIGURE)
 
 
-def residuals_picture(
-    time_s: np.ndarray, residuals: np.ndarray, labels: dict[str, str], directory: Path
-) -> list[Path]:
+def residuals_figure(
+    time_s: np.ndarray, residuals: np.ndarray, labels: dict[str, str]
+) -> plt.Figure:
     """Residual (measured - model) of each output over time (s), in its column's units."""
     figure, axes = _time_panels(len(labels))
     for index, (axis, output) in enumerate(zip(axes, labels, strict=True)):
@@ -114,8 +127,16 @@ def residuals_picture(
         axis.axhline(0.0, color="black", linewidth=0.6)
         axis.set_title(f"{output}: measured - model")
         axis.set_ylabel(labels[output])
+    figure.suptitle("residuals, measured - model", fontsize=10)
     figure.tight_layout()
-    return save_picture(figure, directory, RESIDUALS_FIGURE)
+    return figure
+
+
+def residuals_picture(
+    time_s: np.ndarray, residuals: np.ndarray, labels: dict[str, str], directory: Path
+) -> list[Path]:
+    """Write :func:`residuals_figure` as ``residuals.png`` and ``.pdf``; return the paths."""
+    return save_picture(residuals_figure(time_s, residuals, labels), directory, RESIDUALS_FIGURE)
 
 
 def _correlation_panel(

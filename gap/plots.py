@@ -54,18 +54,23 @@ def residual_spectra_picture(
     return _save(figure, folder, "residual_spectra")
 
 
-def localisation_picture(where: dict[str, Any], folder: Path) -> list[str]:
+def localisation_figure(where: dict[str, Any]) -> plt.Figure:
     """Bars: residual energy share by channel; by frequency band (flight) or the strongest
-    |correlation| with each configuration variable (tunnel); share by time segment or sweep."""
-    figure, axes = plt.subplots(1, 3, figsize=(11, 3.4))
+    |correlation| with each configuration variable (tunnel); share by time segment or sweep.
+    Shares and correlations are fractions (-)."""
+    figure, axes = plt.subplots(1, 3, figsize=(11, 3.8))
     channels = where["by_channel"]
     axes[0].bar(list(channels), [item["energy_share"] for item in channels.values()])
     axes[0].set_title("share by channel")
+    axes[0].set_xlabel("channel")
+    axes[0].set_ylabel("share of residual energy (-)")
     if where["by_band"]:
         bands = where["by_band"]
         labels = [f"{b['band_hz'][0]:g}-{b['band_hz'][1]:.3g}" for b in bands]
         axes[1].bar(labels, [b["pooled_share"] for b in bands])
         axes[1].set_title("share by band (Hz)")
+        axes[1].set_xlabel("frequency band (Hz)")
+        axes[1].set_ylabel("pooled share of residual energy (-)")
     else:
         variables = {
             name: max(abs(v["correlation"]) for v in item["per_load"].values())
@@ -74,6 +79,8 @@ def localisation_picture(where: dict[str, Any], folder: Path) -> list[str]:
         }
         axes[1].bar(list(variables), list(variables.values()))
         axes[1].set_title("|correlation| with configuration")
+        axes[1].set_xlabel("configuration variable")
+        axes[1].set_ylabel("largest |correlation| with a load (-)")
     axes[1].tick_params(axis="x", labelsize=7)
     segments = where["by_segment"]
     axes[2].bar(
@@ -81,12 +88,20 @@ def localisation_picture(where: dict[str, Any], folder: Path) -> list[str]:
         [item["energy_share"] for item in segments.values()],
     )
     axes[2].set_title("share by segment")
+    axes[2].set_xlabel("time segment or sweep")
+    axes[2].set_ylabel("share of residual energy (-)")
+    figure.suptitle("where the baseline's residual lies", fontsize=10)
     figure.tight_layout()
-    return _save(figure, folder, "localisation")
+    return figure
 
 
-def ranking_picture(report: dict[str, Any], folder: Path) -> list[str]:
-    """Validation closure of each candidate with its 90 % interval; the top set highlighted; the
+def localisation_picture(where: dict[str, Any], folder: Path) -> list[str]:
+    """Write ``localisation.png/.pdf`` (:func:`localisation_figure`); return the paths."""
+    return _save(localisation_figure(where), folder, "localisation")
+
+
+def ranking_figure(report: dict[str, Any]) -> plt.Figure:
+    """Validation closure (-) of each candidate with its 90 % interval; the top set highlighted; the
     detection threshold as a dashed line."""
     ranking = report["ranking"]
     figure, axis = plt.subplots(figsize=(7, 0.45 * len(ranking) + 1.2))
@@ -110,9 +125,16 @@ def ranking_picture(report: dict[str, Any], folder: Path) -> list[str]:
         label="detection threshold",
     )
     axis.legend(fontsize=7)
-    axis.set_xlabel("closure of the gap on validation runs (1 - gap after / gap before)")
+    axis.set_xlabel("closure of the gap on validation runs, 1 - gap after / gap before (-)")
+    axis.set_ylabel("candidate effect")
+    axis.set_title("candidate effects ranked (red: top set; bars: 90 % interval)", fontsize=10)
     figure.tight_layout()
-    return _save(figure, folder, "ranking")
+    return figure
+
+
+def ranking_picture(report: dict[str, Any], folder: Path) -> list[str]:
+    """Write ``ranking.png/.pdf`` (:func:`ranking_figure`); return the paths."""
+    return _save(ranking_figure(report), folder, "ranking")
 
 
 def tunnel_residual_picture(
@@ -128,6 +150,7 @@ def tunnel_residual_picture(
         axis.scatter(theta_deg, after[:, index], c=colour, s=18, marker="x", label=f"+ {effect}")
         axis.axhline(0.0, color="black", linewidth=0.6)
         axis.set_xlabel("pitch theta (deg)")
+        axis.set_ylabel(f"residual {label}")
         axis.set_title(f"residual {label}")
     axes[0].legend(fontsize=7)
     figure.colorbar(dots, ax=axes[-1], label="x_h (mm)")
@@ -157,5 +180,67 @@ def steady_residual_picture(
         axis.set_xticks(positions, labels if index == len(channels) - 1 else [], rotation=60)
     np.atleast_1d(axes)[0].legend(fontsize=7)
     np.atleast_1d(axes)[-1].tick_params(axis="x", labelsize=7)
+    np.atleast_1d(axes)[-1].set_xlabel("configuration")
     figure.tight_layout()
     return _save(figure, folder, "residuals_by_configuration")
+
+
+FLIGHT_OVERLAY_CHANNELS = (
+    ("q", "pitch rate q (deg/s)", 180.0 / np.pi),
+    ("u", "body velocity u (m/s)", 1.0),
+    ("w", "body velocity w (m/s)", 1.0),
+    ("theta", "pitch attitude theta (deg)", 180.0 / np.pi),
+)
+"""Channel, axis label and the factor from SI (rad/s, m/s, rad) to the label's unit."""
+
+
+def flight_overlay_figure(
+    time_s: np.ndarray,
+    measured: np.ndarray,
+    baseline: np.ndarray,
+    corrected: np.ndarray,
+    label: str,
+    effect: str,
+) -> plt.Figure:
+    """One manoeuvre over time (s): measured states, the baseline's prediction and the prediction
+    with ``effect`` (corrected), one panel per channel of :data:`FLIGHT_OVERLAY_CHANNELS`; the arrays
+    are (N, 4) in SI (rad/s, m/s, m/s, rad), deviations from the run-in steady state."""
+    figure, axes = plt.subplots(
+        len(FLIGHT_OVERLAY_CHANNELS), 1, figsize=(8, 8), sharex=True, squeeze=False
+    )
+    for index, (axis, (_, name, factor)) in enumerate(
+        zip(axes[:, 0], FLIGHT_OVERLAY_CHANNELS, strict=True)
+    ):
+        axis.plot(time_s, measured[:, index] * factor, color="0.3", linewidth=1.2, label="data")
+        axis.plot(time_s, baseline[:, index] * factor, color="tab:blue", label="baseline")
+        axis.plot(
+            time_s,
+            corrected[:, index] * factor,
+            color="tab:red",
+            linestyle="--",
+            label=f"corrected (+ {effect})",
+        )
+        axis.set_ylabel(name, fontsize=8)
+        axis.grid(True, alpha=0.3)
+    axes[0, 0].legend(fontsize=7, loc="best")
+    axes[-1, 0].set_xlabel("time from the manoeuvre's start (s)")
+    figure.suptitle(
+        f"manoeuvre {label}: data, baseline and corrected model (deviations from the run-in)",
+        fontsize=10,
+    )
+    figure.tight_layout()
+    return figure
+
+
+def flight_overlay_picture(
+    time_s: np.ndarray,
+    measured: np.ndarray,
+    baseline: np.ndarray,
+    corrected: np.ndarray,
+    label: str,
+    effect: str,
+    folder: Path,
+) -> list[str]:
+    """Write ``flight_overlay.png/.pdf`` (:func:`flight_overlay_figure`); return the paths."""
+    figure = flight_overlay_figure(time_s, measured, baseline, corrected, label, effect)
+    return _save(figure, folder, "flight_overlay")

@@ -6,12 +6,19 @@ import json
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+
 from ornitail.core.errors import UserInputError
 from ornitail.core.output import to_jsonable
 from ornitail.gap.flight_data import CHANNELS
 from ornitail.gap.flight_diagnosis import FlightDiagnosis, diagnose_flight, residuals_of
 from ornitail.gap.model_spec import read_baseline_spec
-from ornitail.gap.plots import localisation_picture, ranking_picture, residual_spectra_picture
+from ornitail.gap.plots import (
+    flight_overlay_picture,
+    localisation_picture,
+    ranking_picture,
+    residual_spectra_picture,
+)
 from ornitail.gap.report_text import render_report
 from ornitail.gap.steady_data import is_steady_table
 from ornitail.gap.steady_diagnosis import diagnose_steady
@@ -21,12 +28,27 @@ from ornitail.gap.tunnel_diagnosis import diagnose_tunnel
 
 def _flight_pictures(diagnosis: FlightDiagnosis, folder: Path) -> list[str]:
     effect = diagnosis.report["best_candidate"]
+    before = residuals_of(diagnosis.baseline, diagnosis.runs)
     written = residual_spectra_picture(
-        [r / diagnosis.scales for r in residuals_of(diagnosis.baseline, diagnosis.runs)],
+        [r / diagnosis.scales for r in before],
         [r / diagnosis.scales for r in diagnosis.after_residuals],
         diagnosis.runs[0].time_step_s,
         CHANNELS,
         effect,
+        folder,
+    )
+    # The overlay shows the manoeuvre the baseline misses most (scaled residual energy), corrected with the
+    # effect its own fold chose: the best candidate unless the folds disagree.
+    worst = int(np.argmax([np.mean((r / diagnosis.scales) ** 2) for r in before]))
+    run = diagnosis.runs[worst]
+    choices = diagnosis.report.get("split", {}).get("test_choices") or {}
+    written += flight_overlay_picture(
+        run.time_s,
+        run.states,
+        run.states - before[worst],
+        run.states - diagnosis.after_residuals[worst],
+        run.label,
+        "the effect its fold chose" if len(choices) > 1 else str(effect),
         folder,
     )
     return written

@@ -205,6 +205,10 @@ FILE_SLOTS: dict[str, tuple[str, tuple[str, ...]]] = {
     ),
     "export-csv": (".csv", ("export", "{f}", "--format", "mat", "--out", "{ws}/out")),
     "gui-rig": (".toml", ("gui", "--rig", "{f}")),
+    "runs-plot-hotwire-law": (
+        ".toml",
+        ("runs", "--plot", "{ws}/runs/ok", "--out", "{ws}/out/plot", "--hotwire-law", "{f}"),
+    ),
     "sim-tunnel-rig": (
         ".toml",
         ("sim", "tunnel", "--tail", "S3", "--theta-deg", "25", "--v-m-s", "0.8", "--f-hz", "13.5")
@@ -245,6 +249,17 @@ RUN_DAMAGE = {
     "samples-fifo": ("samples.h5", "not a regular file"),
     "samples-directory": ("samples.h5", "directory"),
 }
+for damage, (named, problem) in RUN_DAMAGE.items():
+    case(
+        "run-directory",
+        f"runs-plot-{damage}",
+        "runs",
+        "--plot",
+        f"{{ws}}/runs/{damage}",
+        "--out",
+        "{ws}/out/plot",
+        expect=(named, problem),
+    )
 for damage, (named, problem) in RUN_DAMAGE.items():
     case(
         "run-directory",
@@ -468,6 +483,50 @@ case(
     "{ws}/roots/catalog-fifo",
     expect="not a regular file",
 )
+case(
+    "runs",
+    "runs-plot-without-the-channels-it-draws",
+    "runs",
+    "--plot",
+    "{ws}/runs/ok",
+    "--out",
+    "{ws}/out/plot",
+    expect="hotwire_bridge_v",
+)
+case(
+    "runs",
+    "runs-plot-unknown-run-id",
+    "runs",
+    "--data-root",
+    "{ws}/roots/ok",
+    "--plot",
+    "no-such-run",
+    "--out",
+    "{ws}/out/plot",
+    expect=("--plot", "no-such-run"),
+)
+case("runs", "runs-plot-empty", "runs", "--plot", "", "--out", "{ws}/out/plot", expect="--plot")
+case("runs", "runs-plot-without-out", "runs", "--plot", "{ws}/runs/ok", expect="--out")
+case("runs", "runs-out-without-plot", "runs", "--out", "{ws}/out/plot", expect="--out")
+case(
+    "runs",
+    "runs-hotwire-law-without-plot",
+    "runs",
+    "--hotwire-law",
+    "{ws}/ok/a-file.txt",
+    expect="--hotwire-law",
+)
+for parent in UNWRITABLE_PARENTS:
+    case(
+        "unwritable",
+        f"runs-plot-out-{Path(parent).name}",
+        "runs",
+        "--plot",
+        "{ws}/runs/ok",
+        "--out",
+        f"{parent}/plot",
+        expect=parent.replace("{ws}/", ""),
+    )
 for parent in UNWRITABLE_PARENTS:
     case(
         "unwritable",
@@ -1536,6 +1595,31 @@ for parent in UNWRITABLE_PARENTS:
         expect=parent.replace("{ws}/", ""),
     )
 case("sim", "trim-ok", "sim", "trim", "--tail", "S3", "--json", valid=True)
+case("sim", "trim-out-ok", "sim", "trim", "--tail", "S3", "--out", "{ws}/out/trim", valid=True)
+case(
+    "sim",
+    "trim-out-a-file",
+    "sim",
+    "trim",
+    "--tail",
+    "S3",
+    "--out",
+    "{ws}/ok/a-file.txt",
+    expect="a-file.txt",
+)
+for parent in UNWRITABLE_PARENTS:
+    case(
+        "unwritable",
+        f"sim-trim-out-{Path(parent).name}",
+        "sim",
+        "trim",
+        "--tail",
+        "S3",
+        "--out",
+        f"{parent}/trim",
+        expect=parent.replace("{ws}/", ""),
+    )
+
 TUNNEL_POINT = {"--theta-deg": "25", "--v-m-s": "0.8", "--f-hz": "13.5"}
 for option in (*TUNNEL_POINT, "--x-h-mm"):
     for value in ("nan", "1e309", "-inf", "1e308", "abc"):

@@ -148,7 +148,8 @@ def show_command(cal_path: Path, as_json: bool) -> None:
     "out_path",
     type=click.Path(path_type=Path),
     default=None,
-    help="Write the law to this .toml or .json file.",
+    help="Write the law to this .toml or .json file, and the fit's picture beside it "
+    "(<name>_fit.png and .pdf).",
 )
 @json_option
 def hotwire_fit_command(
@@ -198,6 +199,11 @@ def hotwire_fit_command(
             raise UserInputError(option[error.where], error.problem) from None
         raise
     fitted_law = fit.law if out_path is None else save_hotwire_law(fit.law, out_path)
+    written = []
+    if out_path is not None:
+        from ornitail.calibration.hotwire_plots import write_hotwire_fit_picture
+
+        written = [out_path, *write_hotwire_fit_picture(fit, points, out_path)]
     if isinstance(fitted_law, KingsLaw):
         coefficients = {
             "a_v2": fitted_law.a_v2,
@@ -226,6 +232,7 @@ def hotwire_fit_command(
         "points_content_hash": points.content_hash,
         "content_hash": fitted_law.content_hash,
         "out": None if out_path is None else str(out_path),
+        "written": [str(path) for path in written],
     }
 
     def render(values: dict) -> str:
@@ -247,6 +254,7 @@ def hotwire_fit_command(
         lines.append(f"hash: {values['content_hash']}")
         if values["out"]:
             lines.append(f"written to {values['out']}")
+        lines += [f"picture: {path}" for path in values["written"][1:]]
         return "\n".join(lines)
 
     emit(result, as_json, render)

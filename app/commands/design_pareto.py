@@ -12,6 +12,7 @@ from ornitail.app.cli_output import emit, json_option
 from ornitail.app.trend_source_options import trend_source_options
 from ornitail.core.input_files import prepare_output_directory
 from ornitail.design.pareto import FRONT_KINDS, pareto_front, write_front
+from ornitail.design.pareto_plots import front_evaluations
 from ornitail.design.proposal import ProposalProblem
 from ornitail.design.proposal_report import check_solver_settings, design_targets
 from ornitail.design.trend_sources import trend_model_from_sources
@@ -20,12 +21,12 @@ from ornitail.design.trend_sources import trend_model_from_sources
 def _render(result: dict[str, Any]) -> str:
     lines = [
         f"front {result['kind']} at x_h {result['x_h_mm']:.0f} mm ({len(result['points'])} points)",
-        "   epsilon    S (cm^2)   zeta     V_ss (m/s)  theta_ss (deg)",
+        "   epsilon    S (cm^2)   zeta   sigma_new    V_ss (m/s)  theta_ss (deg)",
     ]
     for p in result["points"]:
         lines.append(
             f"  {p['epsilon']:8.4g}  {p['s_cm2']:9.2f}  {p['damping_ratio']:7.4f}  "
-            f"{p['v_ss_m_s']:9.4f}  {p['theta_ss_deg']:9.2f}"
+            f"{p['damping_ratio_sigma_new']:8.4f}  {p['v_ss_m_s']:9.4f}  {p['theta_ss_deg']:9.2f}"
         )
     lines += [f"{name}: {path}" for name, path in result["files"].items()]
     return "\n".join(lines)
@@ -67,6 +68,7 @@ def pareto_command(
     trend_model = trend_model_from_sources(study, campaigns, tunnels, user_csvs, basis)
     problem = ProposalProblem(trend_model)
     points = pareto_front(problem, kind, targets, x_h_mm / 1e3, point_count, start_count)
+    evaluations = front_evaluations(problem, points)
     result = {
         "kind": kind,
         "x_h_mm": x_h_mm,
@@ -79,11 +81,13 @@ def pareto_command(
                 "c_t_mm": p.geometry_vector_m[3] * 1e3,
                 "s_cm2": p.area_m2 * 1e4,
                 "damping_ratio": p.damping_ratio,
+                "damping_ratio_sigma_mean": e.damping_ratio.sigma_mean,
+                "damping_ratio_sigma_new": e.damping_ratio.sigma_new,
                 "v_ss_m_s": p.v_ss_m_s,
                 "theta_ss_deg": math.degrees(p.theta_ss_rad),
             }
-            for p in points
+            for p, e in zip(points, evaluations, strict=True)
         ],
-        "files": write_front(points, kind, Path(out_dir)),
+        "files": write_front(points, kind, Path(out_dir), evaluations),
     }
     emit(result, as_json, _render)

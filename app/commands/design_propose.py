@@ -16,13 +16,15 @@ from ornitail.design.proposal import (
     OBJECTIVES,
     propose,
 )
+from ornitail.design.proposal_plots import write_proposal_pictures
 from ornitail.design.proposal_report import (
     check_solver_settings,
     design_targets,
     proposal_result,
     render_proposal,
 )
-from ornitail.design.trend_sources import trend_model_from_sources
+from ornitail.design.trend_sources import gather_observations
+from ornitail.design.trends import fit_trends
 
 
 @click.command("propose")
@@ -93,7 +95,8 @@ from ornitail.design.trend_sources import trend_model_from_sources
     type=click.Path(file_okay=False),
     default="proposal",
     show_default=True,
-    help="Directory for planform.svg/png and cut_1to1.svg.",
+    help="Directory for planform.svg/png, cut_1to1.svg and the proposal's pictures "
+    "(proposal_poles, proposal_response, proposal_in_data; PNG and PDF).",
 )
 @json_option
 def propose_command(
@@ -141,7 +144,12 @@ def propose_command(
         raise UserInputError("--x-h-mm", "give either --x-h-mm or --continuous-x-h, not both")
     check_solver_settings(x_h_mm, start_count, robust_k)
     prepare_output_directory(out_dir)
-    trend_model = trend_model_from_sources(study, campaigns, tunnels, user_csvs, basis)
+    # The study's tables when no source is chosen (as design/trend_sources.trend_model_from_sources does); the
+    # observations are kept for the picture of where the design sits among them.
+    observations = gather_observations(
+        study or not (campaigns or tunnels or user_csvs), campaigns, tunnels, user_csvs
+    )
+    trend_model = fit_trends(observations, basis=basis)
     proposal = propose(
         trend_model,
         targets,
@@ -157,5 +165,8 @@ def propose_command(
         f"S {result['s_cm2']:.1f} cm^2, AR {result['ar']:.2f}, x_h {result['x_h_mm']:.0f} mm, "
         f"zeta {proposal.evaluation.damping_ratio.value:.2f}"
     )
-    result["files"] = write_proposal_drawings(proposal.geometry, title, Path(out_dir))
+    result["files"] = {
+        **write_proposal_drawings(proposal.geometry, title, Path(out_dir)),
+        **write_proposal_pictures(proposal.evaluation, observations, Path(out_dir)),
+    }
     emit(result, as_json, render_proposal)

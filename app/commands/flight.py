@@ -53,7 +53,8 @@ def _render_identification(result: dict[str, Any]) -> str:
     lines += [f"warning: {warning}" for warning in result["warnings"]]
     if "written" in result:
         written = result["written"]
-        lines.append(f"wrote {len(written)} files to {Path(written[0]).parent}")
+        names = ", ".join(Path(path).name for path in written)
+        lines.append(f"wrote {len(written)} files to {Path(written[0]).parent}: {names}")
     return "\n".join(lines)
 
 

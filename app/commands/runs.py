@@ -132,6 +132,27 @@ def _render_table(result: dict[str, Any]) -> str:
     help="completed, incomplete, aborted, failed, crashed or running.",
 )
 @click.option("--since", "since_text", default=None, help="Runs started at or after (ISO 8601).")
+@click.option(
+    "--plot",
+    "plot_run",
+    default=None,
+    help="Draw this run's signals instead of listing runs: a run id under the data root, or a run folder.",
+)
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Folder for the --plot picture (signals_<run id>.png and .pdf).",
+)
+@click.option(
+    "--hotwire-law",
+    "hotwire_law_path",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Hot-wire law (.toml/.json of `calibration hotwire-fit`) to draw the hot wire in m/s with --plot "
+    "[default: its bridge voltage].",
+)
 @json_option
 def runs_command(
     data_root: Path | None,
@@ -140,11 +161,22 @@ def runs_command(
     tailed: bool | None,
     exit_status: str | None,
     since_text: str | None,
+    plot_run: str | None,
+    out_dir: Path | None,
+    hotwire_law_path: Path | None,
     as_json: bool,
 ) -> None:
     """List recorded runs, oldest first; runs whose process died are shown as crashed. The catalog is first
     brought up to date from the run directories; if another process keeps it locked, the runs are listed as
-    their directories say and a note on stderr says so."""
+    their directories say and a note on stderr says so. With --plot RUN --out DIR: draw that run's signals
+    (loads in N and N m, flow in m/s, temperature in degC, flapping frequency in Hz, pitch in deg)."""
+    if plot_run is None and (out_dir is not None or hotwire_law_path is not None):
+        raise UserInputError(
+            "--out" if out_dir is not None else "--hotwire-law", "only used with --plot RUN"
+        )
+    if plot_run is not None:
+        _plot_run(plot_run, data_root, out_dir, hotwire_law_path, as_json)
+        return
     run_filter = RunFilter(
         tail_id=tail_id,
         x_h_m=None if x_h_mm_text is None else parse_x_h_mm(x_h_mm_text),
@@ -186,3 +218,47 @@ def _with_file_problems(data_root: Path, entry: CatalogEntry) -> dict[str, Any]:
         run["recorded_exit_status"] = run["exit_status"]
         run["exit_status"] = "damaged"
     return run
+
+
+def _render_plot(result: dict[str, Any]) -> str:
+    lines = [
+        f"run {result['run_id']} ({result['set_points']} set points): {result['run_directory']}"
+    ]
+    return "\n".join([*lines, *(f"wrote {path}" for path in result["written"])])
+
+
+def _plot_run(
+    run: str, data_root: Path | None, out_dir: Path | None, law_path: Path | None, as_json: bool
+) -> None:
+    """Draw one run's signals into ``out_dir`` (balance/run_signal_plots.py)."""
+    from ornitail.acquisition.recording_layout import RUN_METADATA_FILE_NAME, RUNS_FOLDER_NAME
+    from ornitail.acquisition.recording_reader import load_recording
+    from ornitail.balance.run_signal_plots import run_signals, write_run_signals_picture
+    from ornitail.calibration.hotwire_laws import load_hotwire_law
+    from ornitail.core.input_files import check_input_file, prepare_output_directory
+
+    if out_dir is None:
+        raise UserInputError("--out", "give the folder for the --plot picture")
+    if not run.strip():
+        raise UserInputError("--plot", "give a run id or a run folder")
+    given = Path(run)
+    root = data_root if data_root is not None else default_data_root()
+    directory = given if given.is_dir() else root / RUNS_FOLDER_NAME / run
+    if not directory.is_dir():
+        raise UserInputError(
+            "--plot",
+            f"{run!r} is neither a run folder (with {RUN_METADATA_FILE_NAME}) nor a run id under "
+            f"{root / RUNS_FOLDER_NAME}",
+        )
+    law = None if law_path is None else load_hotwire_law(check_input_file(law_path))
+    prepare_output_directory(out_dir)
+    recording = load_recording(directory)
+    written = write_run_signals_picture(run_signals(recording, hotwire_law=law), out_dir)
+    result = {
+        "run_id": recording.run_id,
+        "run_directory": str(directory),
+        "set_points": len(recording.set_points),
+        "hotwire_law": None if law_path is None else str(law_path),
+        "written": [str(path) for path in written],
+    }
+    emit(result, as_json, _render_plot)

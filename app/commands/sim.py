@@ -10,7 +10,7 @@ import click
 
 from ornitail.app.cli_output import emit, json_option
 from ornitail.core.errors import UserInputError
-from ornitail.core.input_files import prepare_output_file
+from ornitail.core.input_files import prepare_output_directory, prepare_output_file
 
 # The simulator (numpy, scipy, pandas) is imported inside the commands: `ornitail sim --help` stays fast.
 
@@ -49,6 +49,24 @@ def trim_summary(tail: str, x_h_mm: float) -> dict[str, Any]:
     }
 
 
+def _write_trim_pictures(result: dict[str, Any], out_dir: Path) -> list[str]:
+    from ornitail.sim.trim_plots import write_pole_map
+
+    eigenvalues = [
+        complex(re, im)
+        for re, im in zip(result["eigenvalues_real"], result["eigenvalues_imag"], strict=True)
+    ]
+    title = f"tail {result['tail']} at x_h {result['x_h_mm']:g} mm"
+    paths = write_pole_map(
+        eigenvalues,
+        result["damping_ratio"],
+        result["natural_frequency_rad_s"],
+        title,
+        out_dir,
+    )
+    return [str(path) for path in paths]
+
+
 def _render_trim(result: dict[str, Any]) -> str:
     poles = ", ".join(
         f"{re:.3f}{im:+.3f}j"
@@ -65,6 +83,7 @@ def _render_trim(result: dict[str, Any]) -> str:
         "derivatives (SI, body frame of docs/frames.md):",
     ]
     lines += [f"  {name:4s} {value: .4e}" for name, value in result["derivatives"].items()]
+    lines += [f"wrote {path}" for path in result.get("written", [])]
     return "\n".join(lines)
 
 
@@ -73,10 +92,22 @@ def _render_trim(result: dict[str, Any]) -> str:
 @click.option(
     "--x-h-mm", type=float, default=98.0, show_default=True, help="Tail position x_h in mm."
 )
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Folder for the pole map (trim_poles.png and .pdf).",
+)
 @json_option
-def trim_command(tail: str, x_h_mm: float, as_json: bool) -> None:
-    """Free-flight trim and linearised model of a study tail."""
-    emit(trim_summary(tail, x_h_mm), as_json, _render_trim)
+def trim_command(tail: str, x_h_mm: float, out_dir: Path | None, as_json: bool) -> None:
+    """Free-flight trim and linearised model of a study tail; with --out, its pole map."""
+    if out_dir is not None:
+        prepare_output_directory(out_dir)
+    result = trim_summary(tail, x_h_mm)
+    if out_dir is not None:
+        result["written"] = _write_trim_pictures(result, out_dir)
+    emit(result, as_json, _render_trim)
 
 
 @sim_group.command("flight")
