@@ -29,7 +29,8 @@ class ResidualCorrelations:
 
     ``autocorrelation[output]`` is at ``auto_lags`` (0..L), ``input_correlation[(output,
     input)]`` at ``cross_lags`` (-L..L, positive: the residual follows the input) for every
-    non-constant input; L = min(25, N/4) and ``bound`` = 2.576/sqrt(N), as MATLAB's ``resid``.
+    non-constant input; L = min(25, N/4) and ``bound`` = 2.5758/sqrt(N) (99 % normal quantile), as
+    MATLAB's ``resid``.
     """
 
     bound: float

@@ -15,7 +15,7 @@ CONFIDENCE_Z = NORMAL_QUANTILE_99  # MATLAB's resid draws 99 % bounds
 @dataclass(frozen=True)
 class ResidualTests:
     """Whiteness and residual-input independence at 99 % confidence over lags 1..25 (whiteness)
-    and -25..25 (cross-correlation). ``bound`` is 2.576/sqrt(N) on the normalised correlation;
+    and -25..25 (cross-correlation). ``bound`` is 2.5758/sqrt(N) (99 % normal quantile) on the normalised correlation;
     a signal fails when more than 1 % of its tested lags exceed it.
     """
 

@@ -5,6 +5,7 @@ correlation sequences against a direct computation, warnings of a poor fit, and 
 import json
 import math
 from pathlib import Path
+from statistics import NormalDist
 
 import numpy as np
 import pandas as pd
@@ -59,7 +60,12 @@ def _direct_correlations(model_name: str) -> dict[str, object]:
                 cross[(output, name)] = [
                     _correlation(signal, residual, lag) for lag in range(-lags, lags + 1)
                 ]
-    return {"auto": auto, "cross": cross, "bound": 2.576 / math.sqrt(count), "lags": lags}
+    return {
+        "auto": auto,
+        "cross": cross,
+        "bound": NormalDist().inv_cdf(0.995) / math.sqrt(count),
+        "lags": lags,
+    }
 
 
 def _expected_warnings(fit: dict[str, float], direct: dict[str, object]) -> list[tuple[str, str]]:
