@@ -34,15 +34,28 @@ class InstrumentPoller:
         A connected rig (its connections are locked, so a sweep may use them at the same time).
     on_error : callable
         Called in the poller thread with an :class:`InstrumentError` whenever the error text changes.
+    on_recovered : callable
+        Called in the poller thread at the first good reading after an error.
     """
 
-    def __init__(self, rig: Rig, on_error: Callable[[InstrumentError], None]) -> None:
+    def __init__(
+        self,
+        rig: Rig,
+        on_error: Callable[[InstrumentError], None],
+        on_recovered: Callable[[], None] = lambda: None,
+    ) -> None:
         self.rig = rig
         self.latest = InstrumentReadings()
         self._on_error = on_error
+        self._on_recovered = on_recovered
         self._last_error = ""
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="instrument-poller", daemon=True)
+
+    @property
+    def failing(self) -> bool:
+        """True while the last reading failed."""
+        return bool(self._last_error)
 
     def start(self) -> None:
         """Start polling."""
@@ -62,7 +75,9 @@ class InstrumentPoller:
                     self.rig.read_flapping_frequency_hz(),
                     time.monotonic(),
                 )
-                self._last_error = ""
+                if self._last_error:
+                    self._last_error = ""
+                    self._on_recovered()
             except InstrumentError as error:
                 if str(error) != self._last_error:
                     self._last_error = str(error)

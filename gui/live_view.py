@@ -23,25 +23,36 @@ class LiveView(QtWidgets.QWidget):
         layout = QtWidgets.QVBoxLayout(self)
         self.readout = QtWidgets.QLabel("not connected")
         self.readout.setObjectName("liveReadout")
+        self.readout.setWordWrap(True)  # a long line wraps instead of widening the window
         layout.addWidget(self.readout)
         self.plots = pg.GraphicsLayoutWidget()
         layout.addWidget(self.plots)
         window = BALANCE_WINDOW_S
-        forces = live_plot(self.plots, 0, "Forces, body frame (decimated for display)", "N", window)
-        moments = live_plot(self.plots, 1, "Moments about the reference point", "N m", window)
-        flow = live_plot(self.plots, 2, "Hot-wire velocity and temperature", "m/s | degC", window)
-        rig = live_plot(self.plots, 3, "Set-point readings", "deg | m/s | Hz", READINGS_WINDOW_S)
-        self.followers = [YRangeFollower(plot) for plot in (forces, moments, flow, rig)]
+        # One quantity per axis, each with its unit; two columns so that the window fits 1366 x 768.
+        forces = live_plot(
+            self.plots, 0, "Forces, body frame (decimated for display)", "mN", window
+        )
+        moments = live_plot(
+            self.plots, 0, "Moments about the reference point", "mN m", window, col=1
+        )
+        hotwire = live_plot(self.plots, 1, "Hot-wire velocity", "m/s", window)
+        temperature = live_plot(self.plots, 1, "Flow temperature", "degC", window, col=1)
+        pitch = live_plot(self.plots, 2, "Strut pitch", "deg", READINGS_WINDOW_S)
+        speed = live_plot(self.plots, 2, "Tunnel speed (fan)", "m/s", READINGS_WINDOW_S, col=1)
+        frequency = live_plot(self.plots, 3, "Flapping frequency (motor)", "Hz", READINGS_WINDOW_S)
+        self.followers = [
+            YRangeFollower(plot)
+            for plot in (forces, moments, hotwire, temperature, pitch, speed, frequency)
+        ]
         self.load_curves = [curve(forces, i, name) for i, name in enumerate(("X", "Y", "Z"))] + [
             curve(moments, i, name) for i, name in enumerate(("L", "M", "N"))
         ]
-        self.hotwire_curve = curve(flow, 0, "hot-wire velocity (m/s)")
-        self.temperature_curve = curve(flow, 3, "temperature (degC)")
+        self.hotwire_curve = curve(hotwire, 0, "hot-wire velocity (m/s)")
+        self.temperature_curve = curve(temperature, 3, "temperature (degC)")
         self.rig_curves = [
-            curve(rig, i, name)
-            for i, name in enumerate(
-                ("pitch (deg)", "tunnel speed (m/s)", "flapping frequency (Hz)")
-            )
+            curve(pitch, 0, "pitch (deg)"),
+            curve(speed, 1, "tunnel speed (m/s)"),
+            curve(frequency, 2, "flapping frequency (Hz)"),
         ]
 
     def redraw(self) -> None:
@@ -51,24 +62,27 @@ class LiveView(QtWidgets.QWidget):
             time_s = (np.arange(len(volts)) - len(volts)) / self.data.display_rate_hz
             keep = thinned(len(volts))
             time_s, shown = time_s[keep], volts[keep]
-            loads = self.data.loads(shown)
+            loads_milli = 1e3 * self.data.loads(shown)  # mN and mN m on the axes
             for index, item in enumerate(self.load_curves):
-                item.setData(time_s, loads[:, index])
-            self.followers[0].follow(loads[:, :3])
-            self.followers[1].follow(loads[:, 3:])
+                item.setData(time_s, loads_milli[:, index])
+            self.followers[0].follow(loads_milli[:, :3])
+            self.followers[1].follow(loads_milli[:, 3:])
             velocity = self.data.hotwire_velocity_m_s(shown)
             temperature = self.data.temperature_c(shown)
             if velocity is not None:
                 self.hotwire_curve.setData(time_s, velocity)
+                self.followers[2].follow(velocity)
             self.temperature_curve.setData(time_s, temperature)
-            self.followers[2].follow(temperature, *([] if velocity is None else [velocity]))
+            self.followers[3].follow(temperature)
         history = self.data.instruments.latest()
         if len(history):
             time_s = history[:, 0] - history[-1, 0]
             values = (np.degrees(history[:, 1]), history[:, 2], history[:, 3])
-            for item, value in zip(self.rig_curves, values, strict=True):
+            for item, follower, value in zip(
+                self.rig_curves, self.followers[4:], values, strict=True
+            ):
                 item.setData(time_s, value)
-            self.followers[3].follow(*values)
+                follower.follow(value)
         self.readout.setText(self.readout_text(volts))
 
     def readout_text(self, volts: np.ndarray) -> str:

@@ -20,10 +20,15 @@ MAX_POINTS_PER_CURVE = 1500
 
 
 def live_plot(
-    layout: pg.GraphicsLayoutWidget, row: int, title: str, unit_label: str, window_s: float
+    layout: pg.GraphicsLayoutWidget,
+    row: int,
+    title: str,
+    unit_label: str,
+    window_s: float,
+    col: int = 0,
 ) -> pg.PlotItem:
-    """A plot of the last ``window_s`` seconds in ``layout`` at ``row``, legend and labelled y axis."""
-    plot = layout.addPlot(row=row, col=0, title=title)
+    """A plot of the last ``window_s`` seconds in ``layout`` at ``row``, ``col``, legend and labelled y axis."""
+    plot = layout.addPlot(row=row, col=col, title=title)
     plot.setLabel("left", unit_label)
     plot.setLabel("bottom", "time", units="s")
     for name in ("left", "bottom"):  # axes repaint from a pixmap unless their range changed

@@ -43,6 +43,8 @@ _SAME_PITCH_RAD = 1e-9
 """Commanded pitches this close are the same set point (processing pairs tares by pitch to 1e-9 rad)."""
 WIND_OFF_TIMEOUT_S = 60.0
 """Rig time the fan and motor get to come to rest before a tare."""
+FAULT_SHOWN_S = 10.0
+"""Wall time the status strip stays red after an instrument fault that did not last, s."""
 SHUTDOWN_TIMEOUT_S = 60.0
 """Wall time the window waits for the disconnect (sweep aborted, streams stopped, rig closed) when closing, s."""
 
@@ -116,6 +118,9 @@ class RigSession:
         ``flapping_frequency_hz`` (what a manual record journals as its set point, as a sweep does)."""
         self.recording: ManualRecording | None = None
         self.sweep: SweepRunner | None = None
+        self.instrument_fault: str | None = None
+        """The last instrument failure (a command's or the display readings'), None once they answer again."""
+        self.instrument_fault_time_s = -math.inf
         self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rig-command")
 
     # -- plumbing ---------------------------------------------------------------------------
@@ -132,7 +137,7 @@ class RigSession:
             except UserInputError as error:
                 self.post("user_error", str(error))
             except (InstrumentError, TimeoutError, OSError) as error:
-                self.post("error", f"{what}: {error}")
+                self._instrument_failed(f"{what}: {error}")
             except Exception as error:  # a bug: still a message, never a dead window
                 self.post("error", f"{what}: {type(error).__name__}: {error}")
             return None
@@ -163,6 +168,31 @@ class RigSession:
         if self.sweep_running:
             raise UserInputError(action, "a sweep is running: pause or abort it first")
 
+    # -- instrument faults ------------------------------------------------------------------
+    def _instrument_failed(self, error: object) -> None:
+        """An instrument did not answer as it should: a message, and the status strip turns red."""
+        self.instrument_fault = str(error)
+        self.instrument_fault_time_s = time.monotonic()
+        self.post("error", str(error))
+
+    def _instruments_answer_again(self) -> None:
+        self.instrument_fault = None
+        self.post("info", "instruments answer again")
+
+    def fault_text(self) -> str | None:
+        """The instrument fault to show: one the instruments still have, or one at most
+        ``FAULT_SHOWN_S`` old (a command that failed once), else None."""
+        if self.instrument_fault is None:
+            return None
+        if self.poller_failing or time.monotonic() - self.instrument_fault_time_s < FAULT_SHOWN_S:
+            return self.instrument_fault
+        return None
+
+    @property
+    def poller_failing(self) -> bool:
+        """True while the display's readings of the line instruments fail."""
+        return self.poller is not None and self.poller.failing
+
     # -- connection -------------------------------------------------------------------------
     def connect(self, rig_file: Path, time_scale: float | None = None) -> Future:
         """Connect the rig file's instruments (simulators first for a simulated rig) and start streaming."""
@@ -185,7 +215,7 @@ class RigSession:
             raise
         self.rig = rig
         self.calibration = rig.calibration.with_tool_transform(rig.description.tool_transform)
-        self.poller = InstrumentPoller(rig, lambda error: self.post("error", str(error)))
+        self.poller = InstrumentPoller(rig, self._instrument_failed, self._instruments_answer_again)
         self.poller.start()
         self.post("connected", f"connected {rig.description.name} ({rig.description.path})")
 

@@ -1,8 +1,8 @@
-"""Runs tab: the catalog of recordings, one run's set points, and processing with derivatives and intervals."""
+"""Runs tab: the catalog of recordings; one run's set points and raw signals; processing with derivatives,
+intervals and the processed figures."""
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Callable
 from datetime import UTC, datetime
@@ -12,10 +12,11 @@ from typing import Any
 from PySide6 import QtWidgets
 
 from ornitail.acquisition.catalog import CatalogEntry, RunCatalog
-from ornitail.acquisition.recording_reader import load_recording
 from ornitail.balance.process_runs import process_runs
 from ornitail.core.normal_quantiles import NORMAL_QUANTILE_95
 from ornitail.gui.background_job import BackgroundJobs
+from ornitail.gui.picture_label import PictureView
+from ornitail.gui.run_browser import RunBrowser
 
 RUN_COLUMNS = (
     "run id",
@@ -89,11 +90,25 @@ class RunsTab(QtWidgets.QWidget):
         layout.addLayout(buttons)
         self.details = QtWidgets.QPlainTextEdit()
         self.details.setReadOnly(True)
-        layout.addWidget(self.details, 1)
         self.derivatives = QtWidgets.QTableWidget(0, 4)
         self.derivatives.setHorizontalHeaderLabels(("derivative", "value", "95 % interval", "unit"))
         self.derivatives.horizontalHeader().setStretchLastSection(True)
-        layout.addWidget(self.derivatives, 1)
+        self.browser = RunBrowser(on_problem)
+        self.figure_choice = QtWidgets.QComboBox()
+        self.figure_choice.currentIndexChanged.connect(self._show_figure)
+        self.figure = PictureView("process runs to see their figures")
+        figures = QtWidgets.QWidget()
+        figures_layout = QtWidgets.QVBoxLayout(figures)
+        figures_layout.addWidget(self.figure_choice)
+        figures_layout.addWidget(self.figure, 1)
+        processed = QtWidgets.QSplitter()
+        processed.addWidget(self.details)
+        processed.addWidget(self.derivatives)
+        self.views = QtWidgets.QTabWidget()
+        self.views.addTab(self.browser, "Set points and signals")
+        self.views.addTab(processed, "Processed")
+        self.views.addTab(figures, "Processed figures")
+        layout.addWidget(self.views, 3)
         self.reload_button.clicked.connect(self.reload)
         self.open_button.clicked.connect(self.open_selected)
         self.process_button.clicked.connect(self.process_selected)
@@ -121,32 +136,12 @@ class RunsTab(QtWidgets.QWidget):
         return [self.runs[row] for row in rows]
 
     def open_selected(self) -> None:
-        """Show the first selected run's metadata summary and set points."""
+        """Show the first selected run's set points and raw signals (read in the background)."""
         runs = self.selected_runs()
         if not runs:
             return
-        recording = load_recording(self.data_root / runs[0].run_directory)
-        frame = recording.set_points_frame()
-        columns = [
-            c
-            for c in (
-                "plan_point_index",
-                "kind",
-                "sweep",
-                "pitch_rad",
-                "tunnel_velocity_m_s",
-                "flapping_frequency_hz",
-                "tail_attached",
-            )
-            if c in frame
-        ]
-        summary = {
-            k: recording.metadata.get(k)
-            for k in ("run_id", "exit_status", "failure_reason", "sample_count", "set_point_count")
-        }
-        self.details.setPlainText(
-            json.dumps(summary, indent=1) + "\n" + frame[columns].to_string(index=False)
-        )
+        self.views.setCurrentWidget(self.browser)
+        self.browser.open(self.data_root / runs[0].run_directory)
 
     def process_selected(self) -> None:
         """Process the selected runs in the background; show derivatives with 95 % intervals."""
@@ -159,6 +154,7 @@ class RunsTab(QtWidgets.QWidget):
         directories = [self.data_root / run.run_directory for run in runs]
         out = self.data_root / "processed" / f"{datetime.now(UTC):%Y%m%dT%H%M%SZ}"
         self.details.setPlainText(f"processing {len(directories)} run(s) into {out} ...")
+        self.views.setCurrentIndex(1)
         self.jobs.run(process_runs, self.show_processed, directories, out)
 
     def show_processed(self, result: dict[str, Any]) -> None:
@@ -179,6 +175,15 @@ class RunsTab(QtWidgets.QWidget):
             for column, text in enumerate(values):
                 self.derivatives.setItem(row, column, QtWidgets.QTableWidgetItem(text))
         self.derivatives.resizeColumnsToContents()
+        self.figure_choice.clear()
+        for path in result["written"]:
+            if path.endswith(".png"):
+                self.figure_choice.addItem(Path(path).stem, path)
+
+    def _show_figure(self, index: int) -> None:
+        path = self.figure_choice.itemData(index)
+        if path is not None:
+            self.figure.show_file(Path(path))
 
     def latest_derivatives_files(self) -> list[str]:
         """Derivative JSON files of the last processing (for the design tab's trends)."""

@@ -68,8 +68,11 @@ class StatusPanel(QtWidgets.QWidget):
             (self.frame_rate, "frameRate"),
         ):
             label.setObjectName(name)
-            layout.addWidget(label)
-        layout.addStretch(1)
+            # long texts are cut, never widen the window (the whole text is the tooltip)
+            label.setSizePolicy(
+                QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Preferred
+            )
+            layout.addWidget(label, 0 if label is self.frame_rate else 1)
 
     def refresh(self, frames_per_s: float) -> None:
         """Show the session's current state."""
@@ -87,9 +90,16 @@ class StatusPanel(QtWidgets.QWidget):
                 )
             )
             failure = live.error if live is not None else None
+            fault = session.fault_text()
             text = f"rig: {session.rig.description.name}, fan/strut/motor connected, {streaming}"
-            self.instruments.setText(text if failure is None else f"balance failed: {failure}")
-            self.instruments.setStyleSheet(OK_STYLE if failure is None else WARN_STYLE)
+            if failure is not None:
+                text = f"balance failed: {failure}"
+            elif fault is not None:
+                text = f"INSTRUMENT FAULT: {fault}"
+            self.instruments.setText(text)
+            self.instruments.setStyleSheet(
+                OK_STYLE if failure is None and fault is None else WARN_STYLE
+            )
         health = live.health() if live is not None else None
         self._show_health(health)
         recording = session.recording
@@ -103,6 +113,9 @@ class StatusPanel(QtWidgets.QWidget):
             self.recording.setText("not recording")
         self.recording.setStyleSheet(WARN_STYLE if recording or session.sweep_running else "")
         self.frame_rate.setText(f"{frames_per_s:.0f} fps")
+        for label in (self.instruments, self.link, self.saturation, self.recording):
+            if label.toolTip() != label.text():
+                label.setToolTip(label.text())
 
     def _show_health(self, health: LinkHealth | None) -> None:
         if health is None:

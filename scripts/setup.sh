@@ -7,8 +7,11 @@ set -euo pipefail
 repo_root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$repo_root"
 
-# Debian packages: python3-venv (venv on Debian's own Python) and the libraries offscreen Qt needs.
-system_packages=(libegl1 libgl1 libxkbcommon0 libfontconfig1 libglib2.0-0 libdbus-1-3)
+# Debian packages: python3-venv (venv on Debian's own Python), the libraries offscreen Qt needs, those Qt's xcb
+# platform needs on a real X display (`ornitail gui` on a desktop), and xvfb (the window tested on an X server).
+system_packages=(libegl1 libgl1 libxkbcommon0 libfontconfig1 libglib2.0-0 libdbus-1-3
+  libxcb-cursor0 libxcb-icccm4 libxcb-image0 libxcb-keysyms1 libxcb-randr0 libxcb-render-util0 libxcb-shape0
+  libxcb-xkb1 libxkbcommon-x11-0 libx11-xcb1 xvfb)
 if ! python3 -c "import venv, ensurepip" >/dev/null 2>&1; then
   system_packages+=(python3-venv)
 fi

@@ -115,6 +115,21 @@ def test_abort_pause_resume_complete_and_process_a_sweep(connected, qtbot, tmp_p
     value = float(runs_tab.derivatives.item(row, 1).text())
     low, high = (float(x) for x in runs_tab.derivatives.item(row, 2).text().strip("[]").split(","))
     assert low < value < high
+    # The processed figures can be looked at in the tab (every PNG processing wrote, one shown).
+    figures = [runs_tab.figure_choice.itemText(i) for i in range(runs_tab.figure_choice.count())]
+    assert any(name.endswith("-sweep-fits") for name in figures), figures
+    assert runs_tab.figure.pixmap is not None and not runs_tab.figure.pixmap.isNull()
+    # Opening a run lists its set points with units and draws its raw signals; a set point zooms to its record.
+    runs_tab.table.selectRow(0)
+    runs_tab.open_button.click()
+    browser = runs_tab.browser
+    qtbot.waitUntil(lambda: browser.picture.pixmap is not None, timeout=60_000)
+    assert browser.table.rowCount() == len(browser.opened.recording.set_points)
+    header = [browser.table.horizontalHeaderItem(i).text() for i in range(3, 6)]
+    assert header == ["theta (deg)", "V (m/s)", "f (Hz)"]
+    whole = browser.picture.pixmap.cacheKey()
+    browser.table.selectRow(1)
+    qtbot.waitUntil(lambda: browser.picture.pixmap.cacheKey() != whole, timeout=60_000)
 
 
 def test_emergency_stop_mid_sweep_stops_motor_and_tunnel(connected, qtbot, tmp_path):
