@@ -307,16 +307,30 @@ def _fold(
 
 
 def diagnose_flight(
-    spec: BaselineSpec, data_paths: Sequence[str | Path], seed: int = DEFAULT_SEED
+    spec: BaselineSpec,
+    data_paths: Sequence[str | Path],
+    seed: int = DEFAULT_SEED,
+    on_step: Callable[[int, int, str], None] | None = None,
 ) -> FlightDiagnosis:
-    """Run the whole diagnosis of flight logs against ``spec``'s baseline."""
+    """Run the whole diagnosis of flight logs against ``spec``'s baseline.
+
+    ``on_step(done, total, what)`` is told of each finished step (the candidate library fitted and ranked on one
+    fold of the nested split, the second effect, the localisation), for a progress display.
+    """
     runs = read_flight_runs(data_paths)
     splits = nested_splits(len(runs), seed, ", ".join(str(path) for path in data_paths))
+    total_steps = len(splits) + 2
+
+    def step(done: int, what: str) -> None:
+        if on_step is not None:
+            on_step(done, total_steps, what)
+
     baseline = baseline_flight_model(spec)
     split, signal_scales = _fold(runs, splits[0], baseline, seed)
     scales = split.scales
     library = flight_candidates(spec, baseline)
     ranking, fitted, rule = _score_library(library, baseline, baseline, split)
+    step(1, f"fold 1 of {len(splits)}: library ranked")
     chosen_model = fitted[ranking.entries[0].name]
     first_test = [runs[i] for i in splits[0].test]
     second = None
@@ -326,10 +340,11 @@ def diagnose_flight(
         rest = [c for c in library if c.name not in ranking.top_set]
         if rest:
             second = _score_library(rest, chosen_model, baseline, split, first)
+    step(2, "second effect")
     # how far: every run is a test run once, scored with the effect chosen and fitted without it
     after_residuals = dict(zip(splits[0].test, residuals_of(chosen_model, first_test), strict=True))
     choices = {ranking.entries[0].name: 1}
-    for part in splits[1:]:
+    for fold, part in enumerate(splits[1:], start=2):
         fold_ranking, fold_fitted, _ = _score_library(
             library, baseline, baseline, _fold(runs, part, baseline, seed)[0], calibrate=False
         )
@@ -337,6 +352,7 @@ def diagnose_flight(
         choices[name] = choices.get(name, 0) + 1
         test = [runs[i] for i in part.test]
         after_residuals.update(zip(part.test, residuals_of(fold_fitted[name], test), strict=True))
+        step(fold + 1, f"fold {fold} of {len(splits)}: library ranked")
     all_residuals = residuals_of(baseline, runs)
     where = localise_flight(runs, all_residuals, signal_scales, baseline)
     pointer = sparse_pointer(split.training, residuals_of(baseline, split.training), baseline)
@@ -365,6 +381,7 @@ def diagnose_flight(
         ),
     )
     report["second_effect"] = _second_effect(second, chosen_model, first_test, scales, seed)
+    step(total_steps, "localised and reported")
     return FlightDiagnosis(
         report,
         runs,

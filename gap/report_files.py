@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -55,9 +55,15 @@ def _flight_pictures(diagnosis: FlightDiagnosis, folder: Path) -> list[str]:
 
 
 def diagnose_files(
-    model_path: Path, data_paths: Sequence[Path], seed: int, out: Path, pictures: bool = True
+    model_path: Path,
+    data_paths: Sequence[Path],
+    seed: int,
+    out: Path,
+    pictures: bool = True,
+    on_step: Callable[[int, int, str], None] | None = None,
 ) -> dict[str, object]:
-    """Diagnose ``data_paths`` against the baseline file; write the report into ``out``."""
+    """Diagnose ``data_paths`` against the baseline file; write the report into ``out``. ``on_step(done, total,
+    what)`` follows a flight diagnosis' steps (:func:`diagnose_flight`)."""
     spec = read_baseline_spec(model_path)
     for path in data_paths:
         if not Path(path).exists():
@@ -91,7 +97,7 @@ def diagnose_files(
         if pictures:
             written += diagnosis.pictures(out)
     else:
-        flight = diagnose_flight(spec, data_paths, seed)
+        flight = diagnose_flight(spec, data_paths, seed, on_step)
         report = flight.report
         if pictures:
             written += _flight_pictures(flight, out)

@@ -26,6 +26,11 @@ class BackgroundJobs(QtCore.QObject):
         self._timer = QtCore.QTimer(self)
         self._timer.timeout.connect(self._poll)
 
+    @property
+    def busy(self) -> bool:
+        """True while a job runs or waits (docs/screenshots/make_screenshots.py waits on it)."""
+        return bool(self._pending)
+
     def run(self, function: Callable[..., Any], on_done: Callable[[Any], None], *args: Any) -> None:
         """Call ``function(*args)`` in the worker; ``on_done(result)`` in the GUI thread afterwards."""
         self._pending.append((self._executor.submit(function, *args), on_done))

@@ -71,7 +71,15 @@ def diagnose_command(
     from ornitail.gap.report_files import diagnose_files
     from ornitail.gap.report_text import render_report
 
-    report = diagnose_files(model_path, list(data_paths), seed, out, pictures=not no_pictures)
+    with Progress("gap diagnose", 1, "steps", bar_delay_s=1.0) as bar:
+        report = diagnose_files(
+            model_path,
+            list(data_paths),
+            seed,
+            out,
+            pictures=not no_pictures,
+            on_step=lambda done, total, what: bar.update(done, item=what, total=total),
+        )
     emit(report, as_json, render_report)
 
 

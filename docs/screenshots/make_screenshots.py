@@ -1,9 +1,12 @@
-"""Screenshots of each tab of the window on the simulated rig, for the README. Run under a virtual display:
+"""Screenshots of each tab of the window on the simulated rig, for the README and docs/gui.md. Run under a virtual
+display of the screen size wanted, once per size:
 
-    xvfb-run -a -s "-screen 0 1700x1100x24" .venv/bin/python docs/screenshots/make_screenshots.py docs/screenshots
+    xvfb-run -a -s "-screen 0 1366x768x24" .venv/bin/python docs/screenshots/make_screenshots.py docs/screenshots
+    xvfb-run -a -s "-screen 0 1920x1080x24" .venv/bin/python docs/screenshots/make_screenshots.py docs/screenshots
 
-It records a tailless and a tailed manual point (tare first), runs a short sweep plan, processes the sweep's runs
-and proposes a tail, all in real time on the simulated rig (about three minutes).
+The window is shown maximised, as on a tunnel PC; the pictures are named ``<tab>-<width>x<height>.png``. It
+records a tailless and a tailed manual point (tare first), runs a short sweep plan, processes the sweep's runs,
+opens one run's signals and proposes a tail, all in real time on the simulated rig (about three minutes).
 """
 
 import os
@@ -21,10 +24,11 @@ from ornitail.gui.rig_session import RigSession
 
 out = pathlib.Path(sys.argv[1])
 app = QtWidgets.QApplication([])
+screen = app.primaryScreen().size()
+size = f"{screen.width()}x{screen.height()}"
 root = pathlib.Path(tempfile.mkdtemp())
 w = MainWindow(RigSession(root))
-w.resize(1600, 1000)
-w.show()
+w.showMaximized()
 
 
 def spin(sec):
@@ -52,10 +56,10 @@ for tailed in (False, True):  # a tailless, then a tailed point: the cycle view 
     spin(1)
 w.tabs.setCurrentWidget(w.live_view)
 spin(2)
-w.grab().save(str(out / "live.png"))
+w.grab().save(str(out / f"live-{size}.png"))
 w.tabs.setCurrentWidget(w.cycle_view)
 spin(2)
-w.grab().save(str(out / "cycle.png"))
+w.grab().save(str(out / f"cycle-{size}.png"))
 plan = pathlib.Path(tempfile.mkdtemp()) / "short.toml"
 plan.write_text((pathlib.Path(__file__).parent / "short_plan.toml").read_text())
 w.sweep_panel.plan_file.edit.setText(str(plan))
@@ -73,11 +77,24 @@ w.runs_tab.process_selected()
 while w.runs_tab.jobs.busy:
     spin(0.5)
 spin(1)
-w.grab().save(str(out / "runs.png"))
+w.runs_tab.views.setCurrentIndex(2)  # the processed figures
+spin(1)
+w.grab().save(str(out / f"runs-{size}.png"))
+w.runs_tab.table.clearSelection()
+w.runs_tab.table.selectRow(0)
+w.runs_tab.open_selected()
+while w.runs_tab.browser.jobs.busy:
+    spin(0.5)
+w.runs_tab.browser.table.selectRow(3)
+spin(0.5)
+while w.runs_tab.browser.jobs.busy:
+    spin(0.5)
+spin(1)
+w.grab().save(str(out / f"signals-{size}.png"))
 w.tabs.setCurrentWidget(w.design_tab)
 w.design_tab.start_proposal()
 while w.design_tab.jobs.busy:
     spin(0.5)
 spin(1)
-w.grab().save(str(out / "design.png"))
+w.grab().save(str(out / f"design-{size}.png"))
 w.close()

@@ -16,11 +16,11 @@ def flight_report(write_gap_example, tmp_path_factory):
     arguments = ["gap", "diagnose", "--model", example["model"], "--data", example["data"]]
     result = CliRunner().invoke(main, [*arguments, "--out", str(out), "--json"])
     assert result.exit_code == 0, result.output
-    return out, json.loads(result.stdout)
+    return out, json.loads(result.stdout), result.stderr
 
 
 def test_flight_diagnosis_writes_and_lists_the_overlay(flight_report):
-    out, report = flight_report
+    out, report, _ = flight_report
     for name in ("flight_overlay", "localisation", "ranking", "residual_spectra"):
         for suffix in ("png", "pdf"):
             assert (out / f"{name}.{suffix}").stat().st_size > 0
@@ -28,12 +28,23 @@ def test_flight_diagnosis_writes_and_lists_the_overlay(flight_report):
 
 
 def test_bar_charts_carry_axis_labels_with_units(flight_report):
-    _, report = flight_report
+    _, report, _ = flight_report
     for axis in localisation_figure(report["where"]).axes:
         assert axis.get_xlabel() and axis.get_ylabel().endswith("(-)")
     (axis,) = ranking_figure(report).axes
     assert axis.get_ylabel() == "candidate effect"
     assert axis.get_xlabel().endswith("(-)")
+
+
+def test_a_diagnosis_in_a_log_ends_with_a_timestamped_progress_line(flight_report):
+    # stderr is not a terminal here: progress comes as lines, the last one at the final step (issue 18)
+    from ornitail.app.progress import PROGRESS_LINE
+
+    _, _, stderr = flight_report
+    lines = [line for line in stderr.splitlines() if PROGRESS_LINE.match(line)]
+    assert lines and "gap diagnose:" in lines[-1] and "localised and reported" in lines[-1]
+    done, total = lines[-1].split(": ", 1)[1].split(" ", 1)[0].split("/")
+    assert done == total
 
 
 def test_overlay_axes_name_quantity_and_unit_in_degrees_at_the_edge():
