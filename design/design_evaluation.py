@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.normal_quantiles import NORMAL_QUANTILE_95
 from ornitail.design.linear_model import (
     A_MATRIX_DERIVATIVES,
     ModalSummary,
@@ -140,6 +141,11 @@ class IntervalEstimate:
     value: float
     sigma_mean: float
     sigma_new: float
+
+    def interval_95(self, kind: str) -> tuple[float, float]:
+        """Two-sided 95 % interval, ``kind`` "mean" (mean trend) or "new" (a new flight)."""
+        sigma = self.sigma_mean if kind == "mean" else self.sigma_new
+        return (self.value - NORMAL_QUANTILE_95 * sigma, self.value + NORMAL_QUANTILE_95 * sigma)
 
 
 @dataclass(frozen=True)

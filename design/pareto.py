@@ -17,7 +17,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -80,8 +80,10 @@ def pareto_front(
     x_h_m: float,
     point_count: int = 8,
     start_count: int = 4,
+    on_point: Callable[[int, int], None] | None = None,
 ) -> list[ParetoPoint]:
-    """The ``kind`` front at tail position ``x_h_m`` (m) with ``point_count`` epsilon values."""
+    """The ``kind`` front at tail position ``x_h_m`` (m) with ``point_count`` epsilon values; ``on_point(done,
+    total)`` follows the re-solves (the two ends, then each epsilon) for a progress display."""
     if kind not in FRONT_KINDS:
         raise UserInputError("kind", f"unknown front {kind!r}; choose {', '.join(FRONT_KINDS)}")
     if not 2 <= point_count <= 50:
@@ -95,6 +97,9 @@ def pareto_front(
         raise UserInputError(
             "targets", "no admissible tail meets the other targets; no front to draw"
         )
+    total = point_count + 2
+    if on_point is not None:
+        on_point(2, total)
     low, high = _point(problem, 0, smallest), _point(problem, 0, best_damped)
     points: list[ParetoPoint] = []
     previous = smallest.geometry_vector_m
@@ -102,7 +107,9 @@ def pareto_front(
         epsilons = np.linspace(low.damping_ratio, high.damping_ratio, point_count)
     else:
         epsilons = np.linspace(low.v_ss_m_s, high.v_ss_m_s, point_count)
-    for epsilon in epsilons:
+    for index, epsilon in enumerate(epsilons, start=3):
+        if on_point is not None and index > 3:
+            on_point(index - 1, total)
         if kind == "area-damping":
             settings = dataclasses.replace(
                 base, targets=dataclasses.replace(targets, damping_ratio_min=float(epsilon))
@@ -117,6 +124,8 @@ def pareto_front(
             continue
         previous = outcome.geometry_vector_m
         points.append(_point(problem, epsilon, outcome))
+    if on_point is not None:
+        on_point(total, total)
     return points
 
 

@@ -9,6 +9,7 @@ from typing import Any
 import click
 
 from ornitail.app.cli_output import emit, json_option
+from ornitail.app.progress import Progress
 from ornitail.app.trend_source_options import trend_source_options
 from ornitail.core.input_files import prepare_output_directory
 from ornitail.design.pareto import FRONT_KINDS, pareto_front, write_front
@@ -67,7 +68,16 @@ def pareto_command(
     prepare_output_directory(out_dir)
     trend_model = trend_model_from_sources(study, campaigns, tunnels, user_csvs, basis)
     problem = ProposalProblem(trend_model)
-    points = pareto_front(problem, kind, targets, x_h_mm / 1e3, point_count, start_count)
+    with Progress("design pareto", point_count + 2, "solves", bar_delay_s=1.0) as bar:
+        points = pareto_front(
+            problem,
+            kind,
+            targets,
+            x_h_mm / 1e3,
+            point_count,
+            start_count,
+            on_point=lambda done, total: bar.update(done, total=total),
+        )
     evaluations = front_evaluations(problem, points)
     result = {
         "kind": kind,
