@@ -28,18 +28,24 @@ class LiveView(QtWidgets.QWidget):
         self.plots = pg.GraphicsLayoutWidget()
         layout.addWidget(self.plots)
         window = BALANCE_WINDOW_S
-        # One quantity per axis, each with its unit; two columns so that the window fits 1366 x 768.
-        forces = live_plot(
-            self.plots, 0, "Forces, body frame (decimated for display)", "mN", window
-        )
-        moments = live_plot(
-            self.plots, 0, "Moments about the reference point", "mN m", window, col=1
-        )
-        hotwire = live_plot(self.plots, 1, "Hot-wire velocity", "m/s", window)
-        temperature = live_plot(self.plots, 1, "Flow temperature", "degC", window, col=1)
-        pitch = live_plot(self.plots, 2, "Strut pitch", "deg", READINGS_WINDOW_S)
-        speed = live_plot(self.plots, 2, "Tunnel speed (fan)", "m/s", READINGS_WINDOW_S, col=1)
-        frequency = live_plot(self.plots, 3, "Flapping frequency (motor)", "Hz", READINGS_WINDOW_S)
+
+        # One quantity per axis, each with its unit, in three rows of a six-column grid so that the window fits
+        # 1366 x 768: the loads wide, then the flow, then the rig's set-point readings.
+        def place(row: int, col: int, span: int, title: str, unit: str, seconds: float):
+            return live_plot(self.plots, row, title, unit, seconds, col=col, colspan=span)
+
+        forces = place(0, 0, 3, "Forces, body frame (decimated)", "mN", window)
+        moments = place(0, 3, 3, "Moments about the reference point", "mN m", window)
+        hotwire = place(1, 0, 2, "Hot-wire velocity", "m/s", window)
+        temperature = place(1, 2, 2, "Flow temperature", "degC", window)
+        pitch = place(1, 4, 2, "Strut pitch", "deg", READINGS_WINDOW_S)
+        speed = place(2, 0, 3, "Tunnel speed (fan)", "m/s", READINGS_WINDOW_S)
+        frequency = place(2, 3, 3, "Flapping frequency (motor)", "Hz", READINGS_WINDOW_S)
+        for column in range(
+            6
+        ):  # equal columns, so that a plot spanning two is a third of the width
+            self.plots.ci.layout.setColumnStretchFactor(column, 1)
+            self.plots.ci.layout.setColumnPreferredWidth(column, 1)
         self.followers = [
             YRangeFollower(plot)
             for plot in (forces, moments, hotwire, temperature, pitch, speed, frequency)

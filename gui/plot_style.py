@@ -26,10 +26,15 @@ def live_plot(
     unit_label: str,
     window_s: float,
     col: int = 0,
+    colspan: int = 1,
 ) -> pg.PlotItem:
-    """A plot of the last ``window_s`` seconds in ``layout`` at ``row``, ``col``, legend and labelled y axis."""
-    plot = layout.addPlot(row=row, col=col, title=title)
+    """A plot of the last ``window_s`` seconds in ``layout`` at ``row``, ``col`` (``colspan`` columns wide),
+    legend and labelled y axis."""
+    plot = layout.addPlot(row=row, col=col, colspan=colspan, title=title)
     plot.setLabel("left", unit_label)
+    plot.getAxis("left").enableAutoSIPrefix(
+        False
+    )  # the unit is the label's: no "(x0.001)" rescaling
     plot.setLabel("bottom", "time", units="s")
     for name in ("left", "bottom"):  # axes repaint from a pixmap unless their range changed
         plot.getAxis(name).setCacheMode(pg.QtWidgets.QGraphicsItem.CacheMode.DeviceCoordinateCache)

@@ -334,7 +334,7 @@ class RigSession:
         rig = self._require_rig()
         self._require_idle("tare")
         self._wait_wind_off(rig)
-        pitch_rad = self._commanded_or_read("pitch_rad", rig.read_pitch_rad)
+        pitch_rad = self._set_value("pitch_rad", rig.read_pitch_rad)
         rows = self._measure(rig, record_s)
         self.tare_volts, self.tare_pitch_rad = rows.mean_volts[:6].copy(), pitch_rad
         recording = self.recording
@@ -349,9 +349,22 @@ class RigSession:
             self.tare_volts,
         )
 
-    def _commanded_or_read(self, key: str, read: Callable[[], float]) -> float:
-        """The value last commanded from the window for ``key``, else the instrument's reading."""
-        return self.commanded[key] if key in self.commanded else read()
+    def _set_value(self, key: str, read: Callable[[], float]) -> float:
+        """The set point a record journals for ``key``: the value last commanded from the window, else the
+        instrument's reading. A reading off the commanded value by more than the settle tolerance (a move still
+        under way, or a strut halted by a tail change or an emergency stop) refuses the record, naming both."""
+        reading = read()
+        if key not in self.commanded:
+            return reading
+        commanded = self.commanded[key]
+        tolerance, to_user, unit = _SETTLED[key]
+        if abs(reading - commanded) > tolerance:
+            raise UserInputError(
+                "record",
+                f"the rig is not at its set point: {_NAMES[key]} reads {to_user(reading):.2f} {unit}, set "
+                f"{to_user(commanded):.2f} {unit}; wait until it settles or set it again",
+            )
+        return commanded
 
     def start_recording(self, tail_id: str, x_h_mm: float, tailed: bool) -> Future:
         """Open a manual run for this configuration (the tail is fitted or removed first if needed)."""
@@ -403,7 +416,7 @@ class RigSession:
         recording = self.recording
         if recording is None:
             raise UserInputError("record point", "no recording running: start one first")
-        pitch_rad = self._commanded_or_read("pitch_rad", rig.read_pitch_rad)
+        pitch_rad = self._set_value("pitch_rad", rig.read_pitch_rad)
         if not recording.has_tare_at(pitch_rad):
             raise UserInputError(
                 "record point",
@@ -415,8 +428,8 @@ class RigSession:
             SET_POINT_KIND_MEASUREMENT,
             record_s,
             pitch_rad,
-            self._commanded_or_read("tunnel_velocity_m_s", rig.read_tunnel_velocity_m_s),
-            self._commanded_or_read("flapping_frequency_hz", rig.read_flapping_frequency_hz),
+            self._set_value("tunnel_velocity_m_s", rig.read_tunnel_velocity_m_s),
+            self._set_value("flapping_frequency_hz", rig.read_flapping_frequency_hz),
         )
 
     def _record(
@@ -553,6 +566,17 @@ class RigSession:
         self.post("info", "EMERGENCY STOP: motor off, fan stopped, strut halted")
 
 
+_SETTLED = {
+    "pitch_rad": (SettleCriteria.pitch_tolerance_rad, math.degrees, "deg"),
+    "tunnel_velocity_m_s": (SettleCriteria.velocity_tolerance_m_s, float, "m/s"),
+    "flapping_frequency_hz": (SettleCriteria.frequency_tolerance_hz, float, "Hz"),
+}
+"""Set-point key -> how far a reading may be from it (a sweep's default settle tolerance), unit conversion, unit."""
+_NAMES = {
+    "pitch_rad": "pitch",
+    "tunnel_velocity_m_s": "tunnel speed",
+    "flapping_frequency_hz": "flapping frequency",
+}
 _COMMANDED = {
     "set_pitch": ("pitch_rad", math.degrees, "deg"),
     "set_tunnel_velocity": ("tunnel_velocity_m_s", float, "m/s"),

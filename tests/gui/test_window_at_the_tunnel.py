@@ -45,6 +45,12 @@ def test_tare_record_and_cycle_view_make_a_processable_manual_run(
     qtbot.waitUntil(lambda: bool(window.log.problems), timeout=10_000)
     assert "no wind-off tare at theta = 25.00 deg" in window.log.problems[-1]
     assert window.session.recording.points == 0
+    # A strut that is not where it was sent (halted mid-move) refuses the record, naming both angles.
+    window.session.commanded["pitch_rad"] = math.radians(30.0)
+    controls.tare_button.click()
+    qtbot.waitUntil(lambda: "not at its set point" in window.log.problems[-1], timeout=20_000)
+    assert "pitch reads 25.00 deg, set 30.00 deg" in window.log.problems[-1]
+    window.session.commanded["pitch_rad"] = math.radians(25.0)
     controls.tare_button.click()
     qtbot.waitUntil(lambda: "samples (in run" in window.log.toPlainText(), timeout=20_000)
     assert window.session.tare_volts.shape == (6,)

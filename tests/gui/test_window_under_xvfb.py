@@ -41,4 +41,7 @@ def test_the_window_fits_the_screen_on_a_real_x_server(width, height, tmp_path):
     assert sizes["screen"] == [width, height]
     assert sizes["minimum"][0] <= width and sizes["minimum"][1] <= height, sizes
     assert sizes["window"][0] <= width and sizes["window"][1] <= height, sizes
+    assert sizes["window"][0] >= 0.9 * width and sizes["window"][1] >= 0.9 * height, (
+        sizes
+    )  # it does fill it
     assert picture.stat().st_size > 10_000  # a real picture of the window, not an empty grab

@@ -1,6 +1,6 @@
 """Show the window on the X display of $DISPLAY (a virtual one in the tests) and report its size as JSON.
 
-Run as ``python window_on_screen.py WIDTH HEIGHT PNG``: the window is shown maximised on a WIDTH x HEIGHT
+Run as ``python window_on_screen.py WIDTH HEIGHT PNG``: the window is made to fill a WIDTH x HEIGHT
 screen through Qt's xcb platform (what a real desktop uses, libxcb-cursor0 and all), given a second of redraws,
 then grabbed into PNG. Prints {"screen": [w, h], "window": [w, h], "minimum": [w, h]}.
 """
@@ -21,7 +21,10 @@ from ornitail.gui.rig_session import RigSession  # noqa: E402
 
 application = QtWidgets.QApplication([])
 window = MainWindow(RigSession(tempfile.mkdtemp()))
-window.showMaximized()
+window.setGeometry(
+    application.primaryScreen().availableGeometry()
+)  # maximised (Xvfb has no window manager)
+window.show()
 end = time.monotonic() + 1.0
 while time.monotonic() < end:
     application.processEvents()
