@@ -3,16 +3,21 @@
 For each seed, the free-flight campaign (``ornitail.flight.campaign.run_campaign``, exactly as
 ``ornitail flight campaign --simulate TAIL@X_H --manoeuvres N`` runs it) flies every tail in the
 simulator (512 Hz log, 65 % elevator doublets, gusts, flap ripple, sensor noise), filters and cuts
-the manoeuvres, identifies each with the DelFly preset, validates, rejects, averages and picks a
-representative model. The truth is the simulator's linearisation about its trim,
-``ornitail.sim.dynamics.linearise(study_configuration(tail, x_h_mm))``, whose derivatives have the
-preset's names, frame (docs/frames.md) and SI units (N m s/rad, N s, N s/m, N m/rad, N/rad).
+the manoeuvres, identifies each with the campaign's model (``--model``, default the campaign's:
+``delfly_longitudinal_bias``, the study's model with nuisance biases; ``delfly_longitudinal`` is
+the study's own), validates, rejects, averages and picks a representative model. The truth is the
+simulator's linearisation about its trim, ``ornitail.sim.dynamics.linearise(study_configuration(
+tail, x_h_mm))``, whose derivatives have the preset's names, frame (docs/frames.md) and SI units
+(N m s/rad, N s, N s/m, N m/rad, N/rad). Nuisance biases have no truth and are not counted.
 
-Printed, for three standard errors of every converged manoeuvre model:
+Printed, for four standard errors of every converged manoeuvre model, each evaluated at the same
+estimate with the library's functions:
 
-- ``colored``: the campaign's (SIDPAC ``m_colores``: full-lag unbiased residual correlation);
-- ``tapered``: the Bartlett-tapered estimate up to lag N/10 (``OutputErrorOptions(colored_sigma=
-  "tapered")``), evaluated at the same estimate with the library's functions;
+- ``morelli``: SIDPAC ``m_colores`` (full-lag unbiased residual correlation), the campaign's
+  default;
+- ``morelli_small_sample``: ``m_colores`` times N_eff / (N_eff - p) (``OutputErrorOptions(
+  colored_sigma="morelli_small_sample")``; docs/flight-campaign.md);
+- ``tapered``: the Bartlett-tapered estimate up to lag N/10 (``colored_sigma="tapered"``);
 - ``cramer_rao``: the Cramer-Rao bound (inverse Fisher information);
 
 the coverage of value +- 1.96 sigma per parameter and tail and pooled (with a 95 % interval that
@@ -21,12 +26,13 @@ correlated), the RMS and mean of the sigma-normalised errors z = (value - truth)
 mean 0 for calibrated, unbiased intervals), and the coverage of the representative model's
 intervals (its covariance recomputed for each sigma kind: the mean model's comes from the spread
 and is the same for all). An interval whose variance came out negative (sigma NaN) counts as not
-covering. Targets: pooled colored coverage 0.90-0.98; the representative intervals cover Mq, Mde,
-Xu and Mu at least 90 % of the time. Exit code 0 when met, 1 when not, 2 for a bad option.
+covering. Targets, judged on the sigma the campaign used (``--colored-sigma``): pooled coverage
+0.90-0.98; the representative intervals cover Mq, Mde, Xu and Mu at least 90 % of the time. Exit
+code 0 when met, 1 when not, 2 for a bad option.
 
 Run: ``.venv/bin/python benchmarks/flight_coverage.py --seeds 40 --tails S1,S5 --manoeuvres 20``
-(12 s per flight of 20 manoeuvres on this 2-core machine when idle, 27 s under a load
-average of 4-10; the whole run 15-35 min).
+(12 s per flight of 20 manoeuvres on this 2-core machine when idle, 23-27 s under a load
+average of 4-6; the whole run 15-35 min).
 """
 
 from __future__ import annotations
@@ -47,27 +53,37 @@ from ornitail.flight.averaged_models import (
     time_averaged_response,
 )
 from ornitail.flight.campaign import ConfigurationResult, run_campaign
-from ornitail.flight.campaign_file import CampaignSpec, configuration_from_label
+from ornitail.flight.campaign_file import (
+    DEFAULT_CAMPAIGN_COLORED_SIGMA,
+    DEFAULT_CAMPAIGN_MODEL,
+    CampaignSpec,
+    configuration_from_label,
+)
 from ornitail.flight.identification_result import IdentificationResult
 from ornitail.flight.model_data import model_data
 from ornitail.flight.output_error import OutputErrorProblem, noise_variances
-from ornitail.flight.residual_statistics import colored_residual_covariance
+from ornitail.flight.residual_statistics import (
+    COLORED_SIGMA_METHODS,
+    colored_residual_covariance,
+)
 from ornitail.sim.configuration import study_configuration
 from ornitail.sim.dynamics import linearise
 
-SIGMA_KINDS = ("colored", "tapered", "cramer_rao")
+SIGMA_KINDS = ("morelli", "morelli_small_sample", "tapered", "cramer_rao")
 Z_95 = 1.959963984540054  # two-sided 95 % normal quantile
 TARGET_POOLED = (0.90, 0.98)
 REPRESENTATIVE_TARGET_PARAMETERS = ("Mq", "Mde", "Xu", "Mu")
 REPRESENTATIVE_TARGET = 0.90
 
 
-def covariance_at_estimate(result: IdentificationResult, data, method: str) -> np.ndarray:
-    """Colored-residual covariance (``method``: ``morelli`` or ``tapered``) of an output-error
-    result, evaluated at its estimate on the data it was fitted to (parameter units squared).
+def covariances_at_estimate(result: IdentificationResult, data) -> dict[str, np.ndarray]:
+    """Parameter covariance of an output-error result for every kind of :data:`SIGMA_KINDS`
+    (``morelli``, ``morelli_small_sample``, ``tapered``, ``cramer_rao``), evaluated at its
+    estimate on the data it was fitted to, for its derivatives (nuisance parameters dropped: the
+    marginal covariance; parameter units squared).
 
-    It is what ``estimate_output_error`` computes at convergence with
-    ``OutputErrorOptions(colored_sigma=method)``; the estimate itself does not depend on it.
+    Each is what ``estimate_output_error`` computes at convergence with
+    ``OutputErrorOptions(colored_sigma=kind)``; the estimate itself does not depend on it.
     """
     spec = result.model
     signals = model_data(spec, data)
@@ -79,11 +95,19 @@ def covariance_at_estimate(result: IdentificationResult, data, method: str) -> n
     residuals = signals.outputs - outputs
     weights = 1.0 / noise_variances(residuals, signals.outputs)
     information = np.einsum("koi,o,koj->ij", sensitivities, weights, sensitivities)
-    covariance = colored_residual_covariance(
-        sensitivities * weights[None, :, None], residuals, information, method
-    )
-    count = len(result.parameter_names)
-    return covariance[:count, :count]
+    indices = [
+        index for index, name in enumerate(result.parameter_names) if name in spec.derivative_names
+    ]
+    covariances = {}
+    for kind in SIGMA_KINDS:
+        if kind == "cramer_rao":
+            covariance = np.linalg.inv(information)
+        else:
+            covariance = colored_residual_covariance(
+                sensitivities * weights[None, :, None], residuals, information, kind
+            )
+        covariances[kind] = covariance[np.ix_(indices, indices)]
+    return covariances
 
 
 def standard_errors(covariance: np.ndarray) -> np.ndarray:
@@ -126,6 +150,9 @@ def representative_estimates(
     representative = result.representative
     values: dict[str, np.ndarray] = {}
     sigmas: dict[str, np.ndarray] = {}
+    if representative.name == "time_averaged":
+        data = time_averaged_response([result.models[i].manoeuvre for i in result.training])
+        time_averaged = covariances_at_estimate(representative.result, data)
     for kind in SIGMA_KINDS:
         if representative.name == "mean":
             values[kind] = representative.estimate.values
@@ -137,16 +164,8 @@ def representative_estimates(
             )
             values[kind], sigmas[kind] = merged.values, standard_errors(merged.covariance)
         else:
-            fit = representative.result
-            values[kind] = fit.parameter_vector()
-            if kind == "colored":
-                covariance = np.asarray(fit.covariance_colored)
-            elif kind == "cramer_rao":
-                covariance = np.asarray(fit.covariance)
-            else:
-                data = time_averaged_response([result.models[i].manoeuvre for i in result.training])
-                covariance = covariance_at_estimate(fit, data, "tapered")
-            sigmas[kind] = standard_errors(covariance)
+            values[kind] = representative.estimate.values
+            sigmas[kind] = standard_errors(time_averaged[kind])
     return values, sigmas
 
 
@@ -155,11 +174,9 @@ def flight_record(result: ConfigurationResult, tail: str, seed: int, truth: dict
     names = result.models[0].parameter_names
     covariances: dict[str, list[np.ndarray]] = {kind: [] for kind in SIGMA_KINDS}
     for model in result.models:
-        covariances["colored"].append(np.asarray(model.result.covariance_colored))
-        covariances["cramer_rao"].append(np.asarray(model.result.covariance))
-        covariances["tapered"].append(
-            covariance_at_estimate(model.result, model.manoeuvre.deviations, "tapered")
-        )
+        at_estimate = covariances_at_estimate(model.result, model.manoeuvre.deviations)
+        for kind in SIGMA_KINDS:
+            covariances[kind].append(at_estimate[kind])
     accepted = np.zeros(len(result.models), dtype=bool)
     accepted[result.accepted] = True
     values, sigmas = representative_estimates(result, covariances)
@@ -182,7 +199,12 @@ def flight_record(result: ConfigurationResult, tail: str, seed: int, truth: dict
 
 
 def fly(
-    tails: Sequence[str], x_h_mm: float, manoeuvres: int, seed: int
+    tails: Sequence[str],
+    x_h_mm: float,
+    manoeuvres: int,
+    seed: int,
+    model: str = DEFAULT_CAMPAIGN_MODEL,
+    colored_sigma: str = DEFAULT_CAMPAIGN_COLORED_SIGMA,
 ) -> tuple[list[FlightRecord], float]:
     """One simulated campaign over ``tails`` (tail i flies with seed ``seed + i``; split seed
     ``seed``), its flight records and its wall time (s).
@@ -195,6 +217,8 @@ def fly(
             for tail in tails
         ),
         seed=seed,
+        model=model,
+        colored_sigma=colored_sigma,
     )
     began = time.perf_counter()
     results = run_campaign(campaign)
@@ -246,8 +270,12 @@ def covered(record: FlightRecord, kind: str, rows: np.ndarray | None = None) -> 
         return np.abs(z) <= Z_95
 
 
-def summarise(records: list[FlightRecord], tails: Sequence[str]) -> dict:
-    """Coverage and normalised-error figures of all flights (see the module docstring)."""
+def summarise(
+    records: list[FlightRecord], tails: Sequence[str], campaign_kind: str = "morelli"
+) -> dict:
+    """Coverage and normalised-error figures of all flights (see the module docstring); the
+    targets are judged on ``campaign_kind``, the sigma the campaign itself used.
+    """
     names = records[0].names
     groups = {tail: [r for r in records if r.tail == tail] for tail in tails}
     groups["all"] = records
@@ -315,9 +343,9 @@ def summarise(records: list[FlightRecord], tails: Sequence[str]) -> dict:
         }
         for group, members in groups.items()
     }
-    pooled = per_manoeuvre["colored"]["pooled"]["all"]["coverage"]
+    pooled = per_manoeuvre[campaign_kind]["pooled"]["all"]["coverage"]
     representative_worst = min(
-        representative["colored"][name]["all"]["coverage"]
+        representative[campaign_kind][name]["all"]["coverage"]
         for name in REPRESENTATIVE_TARGET_PARAMETERS
     )
     targets = {
@@ -338,7 +366,7 @@ def summarise(records: list[FlightRecord], tails: Sequence[str]) -> dict:
     ]
     flight_scatter = {
         tail: float(
-            np.std([f["coverage"]["colored"] for f in per_flight if f["tail"] == tail], ddof=1)
+            np.std([f["coverage"][campaign_kind] for f in per_flight if f["tail"] == tail], ddof=1)
         )
         if len(groups[tail]) > 1
         else math.nan
@@ -348,7 +376,8 @@ def summarise(records: list[FlightRecord], tails: Sequence[str]) -> dict:
         "parameters": list(names),
         "flights": len(records),
         "per_flight": per_flight,
-        "flight_to_flight_sd_of_colored_coverage": flight_scatter,
+        "campaign_sigma": campaign_kind,
+        "flight_to_flight_sd_of_campaign_sigma_coverage": flight_scatter,
         "manoeuvres": int(sum(r.manoeuvres for r in records)),
         "converged": int(sum(len(r.values) for r in records)),
         "diverged": int(sum(r.diverged for r in records)),
@@ -362,13 +391,23 @@ def summarise(records: list[FlightRecord], tails: Sequence[str]) -> dict:
     }
 
 
-def run(seeds: int, tails: Sequence[str], manoeuvres: int, first_seed: int, x_h_mm: float) -> dict:
+def run(
+    seeds: int,
+    tails: Sequence[str],
+    manoeuvres: int,
+    first_seed: int,
+    x_h_mm: float,
+    model: str = DEFAULT_CAMPAIGN_MODEL,
+    colored_sigma: str = DEFAULT_CAMPAIGN_COLORED_SIGMA,
+) -> dict:
     """Fly ``seeds`` campaigns (campaign i: seed ``first_seed + len(tails) * i``) and summarise."""
     records: list[FlightRecord] = []
     began = time.perf_counter()
     campaign_seconds = []
     for number in range(seeds):
-        flown, elapsed = fly(tails, x_h_mm, manoeuvres, first_seed + len(tails) * number)
+        flown, elapsed = fly(
+            tails, x_h_mm, manoeuvres, first_seed + len(tails) * number, model, colored_sigma
+        )
         records += flown
         campaign_seconds.append(elapsed)
         print(
@@ -376,7 +415,7 @@ def run(seeds: int, tails: Sequence[str], manoeuvres: int, first_seed: int, x_h_
             file=sys.stderr,
             flush=True,
         )
-    summary = summarise(records, tails)
+    summary = summarise(records, tails, colored_sigma)
     total = time.perf_counter() - began
     summary.update(
         {
@@ -385,6 +424,8 @@ def run(seeds: int, tails: Sequence[str], manoeuvres: int, first_seed: int, x_h_
             "x_h_mm": x_h_mm,
             "manoeuvres_per_flight": manoeuvres,
             "first_seed": first_seed,
+            "model": model,
+            "colored_sigma": colored_sigma,
             "wall_s": total,
             "s_per_seed": float(np.mean(campaign_seconds)),
             "s_per_flight": total / len(records),
@@ -431,9 +472,9 @@ def render(summary: dict) -> str:
                 )
             )
     lines.append(
-        "flight-to-flight sd of the pooled colored coverage: "
+        f"flight-to-flight sd of the pooled {summary['campaign_sigma']} coverage: "
         + ", ".join(
-            f"{t} {summary['flight_to_flight_sd_of_colored_coverage'][t]:.3f}" for t in tails
+            f"{t} {summary['flight_to_flight_sd_of_campaign_sigma_coverage'][t]:.3f}" for t in tails
         )
     )
     lines.append("")
@@ -498,6 +539,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--manoeuvres", type=int, default=20, help="doublets per flight")
     parser.add_argument("--x-h-mm", type=float, default=98.0, help="tail position, mm")
     parser.add_argument("--first-seed", type=int, default=2018, help="seed of the first campaign")
+    parser.add_argument(
+        "--model",
+        default=DEFAULT_CAMPAIGN_MODEL,
+        help=f"model preset name or file (default the campaign's, {DEFAULT_CAMPAIGN_MODEL})",
+    )
+    parser.add_argument(
+        "--colored-sigma",
+        default=DEFAULT_CAMPAIGN_COLORED_SIGMA,
+        choices=COLORED_SIGMA_METHODS,
+        help=f"the campaign's sigma formula (default {DEFAULT_CAMPAIGN_COLORED_SIGMA}); "
+        "the targets are judged on it",
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     arguments = parser.parse_args(argv)
     tails = [tail.strip() for tail in arguments.tails.split(",") if tail.strip()]
@@ -509,7 +562,13 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     try:
         summary = run(
-            arguments.seeds, tails, arguments.manoeuvres, arguments.first_seed, arguments.x_h_mm
+            arguments.seeds,
+            tails,
+            arguments.manoeuvres,
+            arguments.first_seed,
+            arguments.x_h_mm,
+            arguments.model,
+            arguments.colored_sigma,
         )
     except UserInputError as error:
         print(f"flight_coverage.py: {error}", file=sys.stderr)

@@ -21,9 +21,10 @@ from scipy.stats import chi2
 from ornitail.core.errors import UserInputError
 from ornitail.flight.identification_result import IdentificationResult
 from ornitail.flight.identify import identify
-from ornitail.flight.manoeuvre_models import ManoeuvreModel
+from ornitail.flight.manoeuvre_models import ManoeuvreModel, derivative_part
 from ornitail.flight.manoeuvres import Manoeuvre
 from ornitail.flight.model_file import StateSpaceModelSpec
+from ornitail.flight.output_error import OutputErrorOptions
 from ornitail.flight.sampling import uniform_grid
 
 MERGE_SIGNIFICANCE = 0.05
@@ -184,22 +185,26 @@ AVERAGED_MODEL_NAMES = ("mean", "weighted", "time_averaged")
 
 
 def fit_time_averaged_model(
-    spec: StateSpaceModelSpec, manoeuvres: Sequence[Manoeuvre]
+    spec: StateSpaceModelSpec, manoeuvres: Sequence[Manoeuvre], colored_sigma: str = "morelli"
 ) -> AveragedModel:
     """Identify ``spec`` (constants at the configuration's trim) once on the time-averaged
-    response of ``manoeuvres``: equation error, then output error started from it.
+    response of ``manoeuvres``: equation error, then output error started from it. Its
+    estimate holds the derivatives only (nuisance biases stay in ``result``).
     """
     data = time_averaged_response(manoeuvres)
     first_guess = identify(spec, data, method="equation_error")
     start = {name: first_guess.parameters[name].value for name in first_guess.parameter_names}
-    result = identify(spec, data, method="output_error", start=start)
-    estimate = CombinedEstimate(result.parameter_vector(), np.asarray(result.covariance_colored))
-    return AveragedModel("time_averaged", result.parameter_names, estimate, result=result)
+    options = OutputErrorOptions(colored_sigma=colored_sigma)
+    result = identify(spec, data, method="output_error", start=start, options=options)
+    names, values, covariance = derivative_part(spec, result)
+    estimate = CombinedEstimate(values, covariance)
+    return AveragedModel("time_averaged", names, estimate, result=result)
 
 
 def averaged_models(
     spec: StateSpaceModelSpec,
     models: Sequence[ManoeuvreModel],
+    colored_sigma: str = "morelli",
 ) -> list[AveragedModel]:
     """The mean, covariance-weighted and time-averaged-response models of ``models``' manoeuvres.
 
@@ -213,5 +218,5 @@ def averaged_models(
     return [
         AveragedModel("mean", names, mean_of_parameters(values)),
         AveragedModel("weighted", names, merge, merge=merge),
-        fit_time_averaged_model(spec, [model.manoeuvre for model in models]),
+        fit_time_averaged_model(spec, [model.manoeuvre for model in models], colored_sigma),
     ]

@@ -72,8 +72,8 @@ class ConfigurationResult:
     ``models`` are the converged manoeuvre models (``flags`` rows follow them); ``accepted`` and
     ``training``/``validation`` are indices into ``models``; ``scores`` the mean normalised RMS
     of each averaged model on the validation manoeuvres (lower is better), ``validation_scores``
-    the scores per manoeuvre; ``selection_rule`` picked ``representative`` and ``glitch_rule``
-    found the elevator glitches.
+    the scores per manoeuvre; ``selection_rule`` picked ``representative``, ``glitch_rule``
+    found the elevator glitches and ``colored_sigma`` names the fits' standard-error formula.
     """
 
     configuration: ConfigurationSpec
@@ -98,6 +98,7 @@ class ConfigurationResult:
     representative_eigenvalues: np.ndarray
     validation_responses: tuple[ValidationResponse, ...]
     simulator_reference: LinearisedModel | None = None
+    colored_sigma: str = "morelli"
 
     @property
     def rejected_count(self) -> int:
@@ -177,6 +178,7 @@ def analyse_configuration(
     seed: int,
     progress: ProgressCallback | None = None,
     selection_rule: str = DEFAULT_SELECTION_RULE,
+    colored_sigma: str = "morelli",
 ) -> ConfigurationResult:
     """Run the campaign procedure on one configuration's manoeuvres (module docstring)."""
     report = progress or (lambda fraction, note: None)
@@ -187,7 +189,7 @@ def analyse_configuration(
     total = len(data.manoeuvres)
     for number, manoeuvre in enumerate(data.manoeuvres, start=1):
         report(0.9 * (number - 1) / total, f"{configuration.label}: manoeuvre {number}/{total}")
-        model = fit_manoeuvre_model(spec, manoeuvre, data.mass)
+        model = fit_manoeuvre_model(spec, manoeuvre, data.mass, colored_sigma)
         if model.converged:
             models.append(model)
         else:
@@ -213,7 +215,7 @@ def analyse_configuration(
     training_positions, validation_positions = split_training_validation(accepted.size, seed)
     training, validation = accepted[training_positions], accepted[validation_positions]
     report(0.9, f"{configuration.label}: averaged models")
-    averaged = averaged_models(trimmed_spec, [models[index] for index in training])
+    averaged = averaged_models(trimmed_spec, [models[index] for index in training], colored_sigma)
     scores = score_on_validation(
         trimmed_spec, averaged, [models[index].manoeuvre for index in validation]
     )
@@ -253,6 +255,7 @@ def analyse_configuration(
         representative_eigenvalues=eigenvalues,
         validation_responses=responses,
         simulator_reference=data.simulator_reference,
+        colored_sigma=colored_sigma,
     )
 
 
@@ -307,7 +310,8 @@ def run_campaign(
 
     Configuration ``i`` (0-based) of a simulated campaign flies with seed ``campaign.seed + i``;
     every configuration's 70/30 split uses ``campaign.seed``. ``campaign.input_hold``, when
-    given, replaces the model's input hold for every fit and simulation.
+    given, replaces the model's input hold for every fit and simulation; every fit's standard
+    errors use ``campaign.colored_sigma``.
     """
     spec = load_model(campaign.model)
     if campaign.input_hold is not None:
@@ -324,7 +328,13 @@ def run_campaign(
 
         results.append(
             analyse_configuration(
-                configuration, data, spec, campaign.seed, report, campaign.selection_rule
+                configuration,
+                data,
+                spec,
+                campaign.seed,
+                report,
+                campaign.selection_rule,
+                campaign.colored_sigma,
             )
         )
     return results

@@ -22,11 +22,18 @@ from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import read_toml_file
 from ornitail.flight.manoeuvres import DEFAULT_GLITCH_RULE, GLITCH_RULES
 from ornitail.flight.model_file import INPUT_HOLDS
+from ornitail.flight.residual_statistics import COLORED_SIGMA_METHODS
 from ornitail.flight.validation import DEFAULT_SELECTION_RULE, SELECTION_RULES
 from ornitail.vehicle.geometry import TailGeometry, require_tail_position_mm, study_tails
 
 CONFIGURATION_LABEL = re.compile(r"^(?P<tail>[A-Za-z][A-Za-z0-9_]*)@(?P<x_h_mm>[0-9.]+)$")
 DEFAULT_SIMULATED_MANOEUVRES = 21
+DEFAULT_CAMPAIGN_MODEL = "delfly_longitudinal_bias"
+"""The campaign's default model: the study's DelFly model plus constant state-equation biases
+(nuisance parameters; docs/flight-campaign.md, "Bias terms"). ``delfly_longitudinal`` is the
+study's own model, without them."""
+DEFAULT_CAMPAIGN_COLORED_SIGMA = "morelli"
+"""The campaign's colored-residual sigma formula (docs/flight-campaign.md, "Sigma options")."""
 DEFAULT_SEED = 2018
 MAX_SEED = 2**32 - 1
 """Largest seed accepted (numpy's legacy seed range; seeds are 0..2**32 - 1)."""
@@ -36,6 +43,7 @@ _RULE_CHOICES = {  # optional top-level keys of a campaign file and their allowe
     "selection_rule": SELECTION_RULES,
     "glitch_rule": GLITCH_RULES,
     "input_hold": INPUT_HOLDS,
+    "colored_sigma": COLORED_SIGMA_METHODS,
 }
 
 
@@ -73,15 +81,17 @@ class ConfigurationSpec:
 class CampaignSpec:
     """Configurations to analyse, the split seed, the model (preset name or file path) and the
     rules: ``selection_rule`` (:data:`SELECTION_RULES`), ``glitch_rule`` (:data:`GLITCH_RULES`)
-    and ``input_hold`` (:data:`INPUT_HOLDS`; None keeps the model's own).
+    ``input_hold`` (:data:`INPUT_HOLDS`; None keeps the model's own) and ``colored_sigma``
+    (:data:`COLORED_SIGMA_METHODS`: the standard-error formula of every fit).
     """
 
     configurations: tuple[ConfigurationSpec, ...]
     seed: int = DEFAULT_SEED
-    model: str = "delfly_longitudinal"
+    model: str = DEFAULT_CAMPAIGN_MODEL
     selection_rule: str = DEFAULT_SELECTION_RULE
     glitch_rule: str = DEFAULT_GLITCH_RULE
     input_hold: str | None = None
+    colored_sigma: str = DEFAULT_CAMPAIGN_COLORED_SIGMA
 
 
 def parse_configuration_label(label: str, where: str) -> tuple[str, float]:
@@ -168,7 +178,7 @@ def read_campaign_file(path: str | Path) -> CampaignSpec:
         raise UserInputError(
             f"{path}: seed", f"must be a non-negative integer up to {MAX_SEED}, got {seed!r}"
         )
-    model = document.get("model", "delfly_longitudinal")
+    model = document.get("model", DEFAULT_CAMPAIGN_MODEL)
     if not isinstance(model, str):
         raise UserInputError(f"{path}: model", "must be a preset name or a model-file path")
     if model.endswith(".toml") and not Path(model).is_absolute():
@@ -189,6 +199,7 @@ def read_campaign_file(path: str | Path) -> CampaignSpec:
         selection_rule=rules["selection_rule"] or DEFAULT_SELECTION_RULE,
         glitch_rule=rules["glitch_rule"] or DEFAULT_GLITCH_RULE,
         input_hold=rules["input_hold"],
+        colored_sigma=rules["colored_sigma"] or DEFAULT_CAMPAIGN_COLORED_SIGMA,
     )
 
 

@@ -68,10 +68,17 @@ def representative_record(result: ConfigurationResult) -> dict[str, Any]:
         "u0_m_s": steady.u_m_s,
         "w0_m_s": steady.w_m_s,
         "flapping_frequency_hz": steady.flapping_frequency_hz,
+        "model": result.spec.name,
+        "nuisance_parameters": [
+            name
+            for name in result.spec.free_parameter_names
+            if name not in result.spec.derivative_names
+        ],
         "representative_model": representative.name,
         "selection_rule": result.selection_rule,
         "glitch_rule": result.glitch_rule,
         "input_hold": result.spec.input_hold,
+        "colored_sigma": result.colored_sigma,
         "derivatives": derivatives,
         "poles": [
             [float(value.real), float(value.imag)] for value in result.representative_eigenvalues
@@ -112,10 +119,11 @@ def flat_row(record: dict[str, Any]) -> dict[str, Any]:
     """One CSV row from a JSON record: derivatives as NAME and NAME_sigma, poles as
     pole<i>_real_1_s / pole<i>_imag_1_s, scores as score_<model>, mean PCC as mean_pcc_<model>,
     wins as wins_<model> (total), wins_rms_<model> and wins_pcc_<model>, reference as
-    sim_<field>.
+    sim_<field>, the nuisance parameters' names separated by spaces.
     """
     nested = ("derivatives", "poles", "scores", "mean_pcc", "wins", "simulator_reference")
     row = {key: value for key, value in record.items() if key not in nested}
+    row["nuisance_parameters"] = " ".join(record["nuisance_parameters"])
     for name, estimate in record["derivatives"].items():
         row[name] = estimate["value"]
         row[f"{name}_sigma"] = estimate["sigma"]

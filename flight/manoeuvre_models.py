@@ -5,6 +5,13 @@ smoothed derivatives) first, then output-error maximum likelihood started from i
 trim constants (``theta0``, ``u0``, ``w0``) are set to the manoeuvre's steady state, ``m`` and
 ``Iyy`` to the configuration's mass properties, for every such constant the model file declares.
 
+A model may carry nuisance parameters (``nuisance = true`` in its file: the constant biases of
+``delfly_longitudinal_bias``). They are estimated with everything else, and the manoeuvre's own
+response errors use them, but a :class:`ManoeuvreModel`'s ``values`` and ``covariance`` hold only
+the derivatives (the marginal covariance of the derivatives: the nuisance rows and columns
+dropped), so nothing downstream averages, rejects on or tabulates a bias as if it were a
+derivative.
+
 Uncertainties are the standard errors corrected for colored residuals (``covariance_colored``):
 after the 5 Hz filter the residuals are strongly correlated from sample to sample, and the
 Cramer-Rao bound would understate the scatter between manoeuvres several times.
@@ -25,6 +32,7 @@ from ornitail.flight.linear_simulation import simulate_outputs
 from ornitail.flight.manoeuvres import Manoeuvre, SteadyState
 from ornitail.flight.model_data import model_data
 from ornitail.flight.model_file import StateSpaceModelSpec
+from ornitail.flight.output_error import OutputErrorOptions
 from ornitail.flight.state_space import NumericStateSpace
 from ornitail.flight.validation import ResponseErrors, response_errors
 
@@ -41,7 +49,8 @@ class MassProperties:
 class ManoeuvreModel:
     """The output-error model of one manoeuvre and its response errors on that manoeuvre.
 
-    ``values`` and ``covariance`` follow ``parameter_names`` (the estimated parameters).
+    ``values`` and ``covariance`` follow ``parameter_names``: the estimated derivatives (the free
+    parameters that are not nuisance parameters; ``result`` holds every estimate).
     ``errors`` compares the model simulated from the measured initial state on the measured
     input with the measured states (model units). ``converged`` is False when output error
     diverged; such a model is not used further.
@@ -84,14 +93,28 @@ def trim_constants(
     return {name: value for name, value in available.items() if name in spec.constant_names}
 
 
+def derivative_part(
+    spec: StateSpaceModelSpec, result: IdentificationResult
+) -> tuple[tuple[str, ...], np.ndarray, np.ndarray]:
+    """Names, values and colored covariance (marginal) of the derivatives of a fit of ``spec``:
+    its free parameters without the nuisance parameters (SI units of the model file).
+    """
+    names = tuple(name for name in result.parameter_names if name in spec.derivative_names)
+    indices = np.array([result.parameter_names.index(name) for name in names], dtype=int)
+    values = result.parameter_vector()[indices]
+    covariance = np.asarray(result.covariance_colored, dtype=float)[np.ix_(indices, indices)]
+    return names, values, covariance
+
+
 def simulate_parameters(
     spec: StateSpaceModelSpec, parameter_values: Mapping[str, float], data: pd.DataFrame
 ) -> tuple[np.ndarray, np.ndarray]:
     """Measured and simulated outputs (samples, outputs) of ``spec`` at ``parameter_values``.
 
     The simulation starts from the measured state at the first sample (states with columns) and
-    is driven by the measured input, with the same zero-order-hold discretisation the estimator
-    uses.
+    is driven by the measured input, with the discretisation (input hold) the estimator uses.
+    Parameters not given (e.g. the nuisance biases of an averaged model) are at their start
+    values.
     """
     signals = model_data(spec, data)
     values = {**spec.start_values(), **parameter_values}
@@ -104,26 +127,37 @@ def simulate_parameters(
 
 
 def fit_manoeuvre_model(
-    spec: StateSpaceModelSpec, manoeuvre: Manoeuvre, mass: MassProperties
+    spec: StateSpaceModelSpec,
+    manoeuvre: Manoeuvre,
+    mass: MassProperties,
+    colored_sigma: str = "morelli",
 ) -> ManoeuvreModel:
-    """Equation error, then output error started from it, on one manoeuvre's deviations."""
+    """Equation error, then output error started from it, on one manoeuvre's deviations
+    (standard errors by ``colored_sigma``: :data:`~ornitail.flight.residual_statistics.
+    COLORED_SIGMA_METHODS`).
+    """
     model = spec.with_constants(trim_constants(spec, manoeuvre.steady_state, mass))
     first_guess = identify(model, manoeuvre.deviations, method="equation_error")
     start = {name: first_guess.parameters[name].value for name in first_guess.parameter_names}
-    result = identify(model, manoeuvre.deviations, method="output_error", start=start)
-    values = result.parameter_vector()
+    options = OutputErrorOptions(colored_sigma=colored_sigma)
+    result = identify(
+        model, manoeuvre.deviations, method="output_error", start=start, options=options
+    )
+    names, values, covariance = derivative_part(model, result)
     measured, simulated = simulate_parameters(
         model, result.parameter_values(), manoeuvre.deviations
     )
     converged = bool(
-        result.converged and np.all(np.isfinite(values)) and np.all(np.isfinite(simulated))
+        result.converged
+        and np.all(np.isfinite(result.parameter_vector()))
+        and np.all(np.isfinite(simulated))
     )
     return ManoeuvreModel(
         manoeuvre=manoeuvre,
         result=result,
-        parameter_names=result.parameter_names,
+        parameter_names=names,
         values=values,
-        covariance=np.asarray(result.covariance_colored, dtype=float),
+        covariance=covariance,
         errors=response_errors(measured, simulated),
         converged=converged,
         message=result.message,

@@ -36,7 +36,10 @@ _NAME_PATTERN = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 
 @dataclass(frozen=True)
 class ParameterSpec:
-    """One model parameter: start value, bounds (-inf/inf when absent) and whether it is fixed."""
+    """One model parameter: start value, bounds (-inf/inf when absent), whether it is fixed, its
+    unit, and whether it is a nuisance parameter (estimated with the others, but a property of
+    one record, such as a constant bias, not of the vehicle: never averaged across records).
+    """
 
     name: str
     start: float
@@ -44,6 +47,7 @@ class ParameterSpec:
     upper: float = math.inf
     fixed: bool = False
     unit: str = ""
+    nuisance: bool = False
 
 
 @dataclass(frozen=True)
@@ -101,6 +105,15 @@ class StateSpaceModelSpec:
     @property
     def free_parameter_names(self) -> tuple[str, ...]:
         return tuple(parameter.name for parameter in self.parameters if not parameter.fixed)
+
+    @property
+    def derivative_names(self) -> tuple[str, ...]:
+        """Free parameters that describe the vehicle (not fixed, not nuisance), file order."""
+        return tuple(
+            parameter.name
+            for parameter in self.parameters
+            if not parameter.fixed and not parameter.nuisance
+        )
 
     @property
     def constant_names(self) -> tuple[str, ...]:
@@ -463,7 +476,10 @@ def _parameters(table: Mapping[str, Any], source: str) -> tuple[ParameterSpec, .
         if not isinstance(value, dict):
             value = {"start": value}
         _reject_unknown_keys(
-            value, ("start", "lower", "upper", "fixed", "unit"), source, f"[parameters].{name}"
+            value,
+            ("start", "lower", "upper", "fixed", "unit", "nuisance"),
+            source,
+            f"[parameters].{name}",
         )
         if "start" not in value:
             raise UserInputError(f"{where}.start", "start value missing")
@@ -488,9 +504,16 @@ def _parameters(table: Mapping[str, Any], source: str) -> tuple[ParameterSpec, .
         unit = value.get("unit", "")
         if not isinstance(unit, str):
             raise UserInputError(f"{where}.unit", f"must be a string such as '1/s', got {unit!r}")
-        parameters.append(ParameterSpec(name, start, lower, upper, fixed, unit))
+        nuisance = value.get("nuisance", False)
+        if not isinstance(nuisance, bool):
+            raise UserInputError(f"{where}.nuisance", "must be true or false")
+        parameters.append(ParameterSpec(name, start, lower, upper, fixed, unit, nuisance))
     if all(parameter.fixed for parameter in parameters):
         raise UserInputError(f"{source}: [parameters]", "every parameter is fixed")
+    if all(parameter.fixed or parameter.nuisance for parameter in parameters):
+        raise UserInputError(
+            f"{source}: [parameters]", "every free parameter is a nuisance parameter"
+        )
     return tuple(parameters)
 
 

@@ -36,7 +36,8 @@ from ornitail.flight.result_assembly import assemble_result
 class OutputErrorOptions:
     """Iteration controls and the colored-residual sigma formula. Converged when every
     component of the undamped Gauss-Newton step is below ``step_tolerance`` times its Cramer-Rao
-    sigma. ``colored_sigma``: ``morelli`` (SIDPAC's ``m_colores``, the default) or ``tapered``
+    sigma. ``colored_sigma``: ``morelli`` (SIDPAC's ``m_colores``, the default), ``tapered``, or
+    ``morelli_small_sample`` (``m_colores`` times N_eff / (N_eff - p) for short records)
     (:mod:`ornitail.flight.residual_statistics`).
     """
 

@@ -85,7 +85,7 @@ def residual_tests(
     return ResidualTests(bound, max_auto, white, max_cross, independent)
 
 
-COLORED_SIGMA_METHODS = ("morelli", "tapered")
+COLORED_SIGMA_METHODS = ("morelli", "tapered", "morelli_small_sample")
 
 
 def colored_residual_covariance(
@@ -95,10 +95,14 @@ def colored_residual_covariance(
     method: str = "morelli",
 ) -> np.ndarray:
     """Parameter covariance corrected for colored residuals by ``method`` (see
-    :func:`morelli_colored_covariance` and :func:`tapered_colored_covariance`).
+    :func:`morelli_colored_covariance`, :func:`tapered_colored_covariance` and, for
+    ``morelli_small_sample``, :func:`small_sample_factor`).
     """
     if method == "morelli":
         return morelli_colored_covariance(weighted_sensitivities, residuals, information)
+    if method == "morelli_small_sample":
+        covariance = morelli_colored_covariance(weighted_sensitivities, residuals, information)
+        return covariance * small_sample_factor(residuals, information.shape[0])
     if method == "tapered":
         return tapered_colored_covariance(weighted_sensitivities, residuals, information)
     raise ValueError(f"unknown colored-residual method {method!r}")
@@ -233,3 +237,52 @@ def tapered_colored_covariance(
     inverse = np.linalg.pinv(information)
     covariance = inverse @ middle @ inverse
     return 0.5 * (covariance + covariance.T)
+
+
+def integrated_autocorrelation_time(residual: np.ndarray) -> float:
+    """tau = 1 + 2 sum_{l=1}^{L} rho(l) (samples) of one residual channel: rho the biased sample
+    autocorrelation (mean removed), summed over the initial positive run of lags, L the last lag
+    before rho first drops to zero or below. 1 for white noise; about fs / (2 B) for noise
+    low-passed at bandwidth B (Hz) and sampled at fs (Hz).
+    """
+    values = np.asarray(residual, dtype=float) - np.mean(residual)
+    count = len(values)
+    spectrum = np.fft.rfft(values, n=2 * count)
+    autocovariance = np.fft.irfft(np.abs(spectrum) ** 2, n=2 * count)[:count]
+    if autocovariance[0] <= 0:
+        return 1.0
+    rho = autocovariance[1:] / autocovariance[0]
+    non_positive = np.flatnonzero(rho <= 0)
+    last = int(non_positive[0]) if non_positive.size else len(rho)
+    return float(1.0 + 2.0 * np.sum(rho[:last]))
+
+
+def effective_sample_count(residuals: np.ndarray) -> float:
+    """N_eff = N / mean_c tau_c: the number of effectively independent samples per channel of
+    (N, channels) residuals (:func:`integrated_autocorrelation_time` per channel).
+    """
+    residuals = np.asarray(residuals, dtype=float).reshape(len(residuals), -1)
+    times = [integrated_autocorrelation_time(residuals[:, c]) for c in range(residuals.shape[1])]
+    return float(len(residuals) / np.mean(times))
+
+
+SMALL_SAMPLE_MINIMUM_DEGREES = 1.0
+"""Smallest N_eff - p the small-sample factor divides by (a record with fewer effectively
+independent samples than estimated values gets factor N_eff: sigmas that say "not determined")."""
+
+
+def small_sample_factor(residuals: np.ndarray, estimated_count: int) -> float:
+    """Variance factor N_eff / (N_eff - p) of the option ``morelli_small_sample``.
+
+    Residuals at the estimate are the noise with the fitted directions projected out: for white
+    noise E[sum v^2] = (N - p) sigma^2, the classical degrees-of-freedom loss. For residuals
+    correlated over tau samples the noise lives in N_eff = N / tau effectively independent
+    samples and the p fitted directions (smooth output sensitivities, in the noise's band)
+    remove p of them, so the residual correlation that :func:`morelli_colored_covariance` builds
+    its bracket from is low by (N_eff - p) / N_eff, and more so at the low frequencies the
+    sensitivities weight. ``estimated_count`` p counts every estimated value (free parameters,
+    nuisance biases and estimated initial state); N_eff from :func:`effective_sample_count`.
+    White noise: N / (N - p), about 1 for a long record.
+    """
+    effective = effective_sample_count(residuals)
+    return float(effective / max(effective - estimated_count, SMALL_SAMPLE_MINIMUM_DEGREES))

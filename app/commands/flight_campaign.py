@@ -2,8 +2,10 @@
 
 Input: a campaign file (``--campaign``), flight logs labelled by configuration
 (``--log S3@98=flight.csv``, repeatable) or simulated flights (``--simulate S3@98``,
-repeatable). ``--selection-rule``, ``--glitch-rule`` and ``--input-hold`` override the campaign
-file's rules (defaults: the study's rules, the model's own input hold). Output:
+repeatable). ``--selection-rule``, ``--glitch-rule``, ``--input-hold`` and ``--colored-sigma``
+override the campaign file's rules (defaults: the study's rules, the model's own input hold,
+:data:`DEFAULT_CAMPAIGN_COLORED_SIGMA`); ``--model`` the model (default
+:data:`DEFAULT_CAMPAIGN_MODEL`). Output:
 ``representative_models.csv`` / ``.json`` and the pictures (PNG and PDF) in ``--out``; progress on
 stderr (``ornitail.app.progress``: a bar in a terminal, timestamped lines in a log); with ``--json`` exactly one
 JSON object on stdout.
@@ -24,6 +26,8 @@ from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import check_input_file, prepare_output_directory
 from ornitail.flight.campaign import run_campaign
 from ornitail.flight.campaign_file import (
+    DEFAULT_CAMPAIGN_COLORED_SIGMA,
+    DEFAULT_CAMPAIGN_MODEL,
     DEFAULT_SEED,
     DEFAULT_SIMULATED_MANOEUVRES,
     MAX_SEED,
@@ -38,6 +42,7 @@ from ornitail.flight.campaign_plots import write_campaign_pictures
 from ornitail.flight.campaign_table import write_campaign_table
 from ornitail.flight.manoeuvres import DEFAULT_GLITCH_RULE, GLITCH_RULES
 from ornitail.flight.model_file import INPUT_HOLDS, load_model
+from ornitail.flight.residual_statistics import COLORED_SIGMA_METHODS
 from ornitail.flight.validation import DEFAULT_SELECTION_RULE, SELECTION_RULES
 
 PROGRESS_STEPS_PER_CONFIGURATION = 100
@@ -80,8 +85,8 @@ def _campaign_from_options(
     inertias: tuple[str, ...],
     rules: dict[str, str | None],
 ) -> CampaignSpec:
-    """The campaign the options describe; ``rules`` (selection_rule, glitch_rule, input_hold)
-    given on the command line override the campaign file's.
+    """The campaign the options describe; ``rules`` (selection_rule, glitch_rule, input_hold,
+    colored_sigma) given on the command line override the campaign file's.
     """
     overrides = {key: value for key, value in rules.items() if value is not None}
     sources = sum(bool(item) for item in (campaign_path, logs, simulate))
@@ -128,7 +133,7 @@ def _campaign_from_options(
     return CampaignSpec(
         tuple(configurations.values()),
         DEFAULT_SEED if seed is None else seed,
-        model or "delfly_longitudinal",
+        model or DEFAULT_CAMPAIGN_MODEL,
         **overrides,
     )
 
@@ -202,7 +207,13 @@ def _render(result: dict[str, Any]) -> str:
     default=None,
     help=f"Seed of the 70/30 split and of simulated flights [default: {DEFAULT_SEED}].",
 )
-@click.option("--model", default=None, help="Model preset name or model TOML file.")
+@click.option(
+    "--model",
+    default=None,
+    help="Model preset name or model TOML file [default: the file's, else "
+    f"{DEFAULT_CAMPAIGN_MODEL}: the study's model with constant biases; "
+    "delfly_longitudinal is the study's model without them].",
+)
 @click.option(
     "--mass-kg",
     "masses",
@@ -248,6 +259,14 @@ def _render(result: dict[str, Any]) -> str:
     help="Input hold of the model's discretisation for every manoeuvre "
     "[default: the file's, else the model's own].",
 )
+@click.option(
+    "--colored-sigma",
+    type=click.Choice(COLORED_SIGMA_METHODS),
+    default=None,
+    help="Standard errors of every fit: morelli (SIDPAC's m_colores), morelli_small_sample "
+    "(m_colores times N_eff / (N_eff - p) for short records) or tapered "
+    f"[default: the file's, else {DEFAULT_CAMPAIGN_COLORED_SIGMA}].",
+)
 @click.option("--no-pictures", is_flag=True, help="Write the table only.")
 @json_option
 def campaign_command(
@@ -262,6 +281,7 @@ def campaign_command(
     selection_rule: str | None,
     glitch_rule: str | None,
     input_hold: str | None,
+    colored_sigma: str | None,
     out_directory: Path,
     no_pictures: bool,
     as_json: bool,
@@ -269,7 +289,12 @@ def campaign_command(
     """Cut manoeuvres, identify, validate and average: one representative model per
     configuration (the study's free-flight procedure).
     """
-    rules = {"selection_rule": selection_rule, "glitch_rule": glitch_rule, "input_hold": input_hold}
+    rules = {
+        "selection_rule": selection_rule,
+        "glitch_rule": glitch_rule,
+        "input_hold": input_hold,
+        "colored_sigma": colored_sigma,
+    }
     campaign = _campaign_from_options(
         campaign_path, logs, simulate, manoeuvres, seed, model, masses, inertias, rules
     )
@@ -290,6 +315,7 @@ def campaign_command(
         "selection_rule": campaign.selection_rule,
         "glitch_rule": campaign.glitch_rule,
         "input_hold": campaign.input_hold,
+        "colored_sigma": campaign.colored_sigma,
     }
     csv_path, json_path, records = write_campaign_table(results, out_directory, info)
     written = [csv_path, json_path]

@@ -55,7 +55,12 @@ def test_option_mistakes_are_refused(arguments, message, tmp_path):
 
 @pytest.mark.parametrize(
     ("option", "value"),
-    [("--selection-rule", "best"), ("--glitch-rule", "jump"), ("--input-hold", "linear")],
+    [
+        ("--selection-rule", "best"),
+        ("--glitch-rule", "jump"),
+        ("--input-hold", "linear"),
+        ("--colored-sigma", "white"),
+    ],
 )
 def test_unknown_rules_are_refused_by_the_option_parser(option, value, tmp_path):
     result = CliRunner().invoke(campaign_command, ["--simulate", "S3@98", option, value])
@@ -68,15 +73,30 @@ def test_rule_options_override_the_campaign_file(tmp_path):
         'glitch_rule = "sample_jump"\ninput_hold = "zero_order"\n'
         '[[configuration]]\ntail = "S3"\nx_h_mm = 98\nsimulate = 5\n'
     )
-    no_rules = {"selection_rule": None, "glitch_rule": None, "input_hold": None}
+    no_rules = {
+        "selection_rule": None,
+        "glitch_rule": None,
+        "input_hold": None,
+        "colored_sigma": None,
+    }
     from_file = _campaign_from_options(campaign, (), (), 21, None, None, (), (), no_rules)
     assert (from_file.selection_rule, from_file.glitch_rule, from_file.input_hold) == (
         "most_wins",
         "sample_jump",
         "zero_order",
     )
-    given = {"selection_rule": "lowest_mean_rms", "glitch_rule": None, "input_hold": "first_order"}
+    given = {
+        "selection_rule": "lowest_mean_rms",
+        "glitch_rule": None,
+        "input_hold": "first_order",
+        "colored_sigma": "morelli_small_sample",
+    }
     overridden = _campaign_from_options(campaign, (), (), 21, None, None, (), (), given)
+    assert (from_file.colored_sigma, overridden.colored_sigma) == (
+        "morelli",
+        "morelli_small_sample",
+    )
+    assert from_file.model == overridden.model == "delfly_longitudinal_bias"
     assert (overridden.selection_rule, overridden.glitch_rule, overridden.input_hold) == (
         "lowest_mean_rms",
         "sample_jump",
@@ -179,6 +199,11 @@ def test_campaign_file_run_through_the_console_script(s3_log, tmp_path):
         "lowest_mean_rms",
         "steady_deviation",
     )
+    # the table says which model and sigma formula produced it; biases are not derivatives
+    assert (document["model"], row["model"]) == ("delfly_longitudinal_bias",) * 2
+    assert (document["colored_sigma"], row["colored_sigma"]) == ("morelli", "morelli")
+    assert row["nuisance_parameters"] == ["bq", "bu", "bw", "btheta"]
+    assert not set(row["derivatives"]) & set(row["nuisance_parameters"])
     assert document["selection_rule"] == "lowest_mean_rms"
     assert row["representative_model"] == min(row["scores"], key=row["scores"].get)
     # one RMS and one PCC point per validation manoeuvre at least (more only on exact ties)

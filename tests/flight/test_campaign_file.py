@@ -36,7 +36,9 @@ def test_campaign_file_is_read_with_paths_relative_to_it(tmp_path: Path):
     path = tmp_path / "campaign.toml"
     path.write_text(CAMPAIGN)
     campaign = read_campaign_file(path)
-    assert campaign.seed == 7 and campaign.model == "delfly_longitudinal"
+    # The campaign's default model carries nuisance biases; the study's own model is an option.
+    assert campaign.seed == 7 and campaign.model == "delfly_longitudinal_bias"
+    assert campaign.colored_sigma == "morelli"
     first, second = campaign.configurations
     assert first.label == "S3@98" and first.x_h_m == pytest.approx(0.098)
     assert first.logs[0].path == tmp_path / "day1" / "s3_98.csv"
@@ -96,12 +98,17 @@ def test_campaign_rules_default_to_the_study_and_are_read_from_the_file(tmp_path
         None,
     )
     rules = 'selection_rule = "lowest_mean_rms"\nglitch_rule = "sample_jump"\n'
+    rules += 'colored_sigma = "morelli_small_sample"\nmodel = "delfly_longitudinal"\n'
     path.write_text(rules + 'input_hold = "zero_order"\n' + CAMPAIGN)
     campaign = read_campaign_file(path)
     assert (campaign.selection_rule, campaign.glitch_rule, campaign.input_hold) == (
         "lowest_mean_rms",
         "sample_jump",
         "zero_order",
+    )
+    assert (campaign.colored_sigma, campaign.model) == (
+        "morelli_small_sample",
+        "delfly_longitudinal",
     )
 
 
@@ -111,6 +118,7 @@ def test_campaign_rules_default_to_the_study_and_are_read_from_the_file(tmp_path
         ('selection_rule = "best"', r"selection_rule: must be one of most_wins, lowest_mean_rms"),
         ("glitch_rule = 25", r"glitch_rule: must be one of steady_deviation, sample_jump"),
         ('input_hold = "linear"', r"input_hold: must be one of first_order, zero_order"),
+        ('colored_sigma = "white"', r"colored_sigma: must be one of morelli, tapered, morelli_sm"),
     ],
 )
 def test_unknown_rules_are_refused(tmp_path: Path, line, message):

@@ -37,6 +37,10 @@ def campaign_results():
     return results, notes
 
 
+def reference_names() -> set[str]:
+    return set(linearise(study_configuration("S1", 98.0)).derivatives)
+
+
 def _oscillatory(result):
     return next(m.mode for m in result.representative_modes if m.mode.oscillatory)
 
@@ -145,6 +149,12 @@ def test_table_and_pictures_are_written(campaign_results, tmp_path):
         np.testing.assert_allclose(poles, result.representative_eigenvalues, rtol=1e-12)
     document = json.loads(json_path.read_text())
     assert document["seed"] == 2018
+    # the campaign's default model: the study's derivatives plus nuisance biases, which are
+    # estimated per manoeuvre but never tabulated as derivatives
+    for record in document["configurations"]:
+        assert record["model"] == "delfly_longitudinal_bias"
+        assert record["nuisance_parameters"] == ["bq", "bu", "bw", "btheta"]
+        assert set(record["derivatives"]) == set(reference_names())
     assert document["configurations"][1]["derivatives"]["Mq"]["sigma"] > 0
     assert document["configurations"][0]["simulator_reference"]["damping_ratio"] > 0
     pictures = write_campaign_pictures(results, tmp_path / "pictures")

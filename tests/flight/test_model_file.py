@@ -55,6 +55,35 @@ def test_the_presets_load_by_name():
     assert otter.outputs == ("alpha", "q", "a_z") and otter.columns["bias"].constant == 1.0
 
 
+def test_the_bias_preset_is_the_study_model_plus_nuisance_biases():
+    """Same derivatives, constants and A; B gains a bias column; the biases are nuisance."""
+    study, biased = load_model("delfly_longitudinal"), load_model("delfly_longitudinal_bias")
+    assert biased.inputs == ("elevator", "bias") and biased.columns["bias"].constant == 1.0
+    assert biased.derivative_names == study.free_parameter_names == study.derivative_names
+    nuisance = [p.name for p in biased.parameters if p.nuisance]
+    assert nuisance == ["bq", "bu", "bw", "btheta"]
+    assert biased.constants == study.constants
+    values = {**study.start_values(), "bq": 0.3, "bu": -0.05, "bw": 0.04, "btheta": 0.02}
+    with_biases = biased.state_space(values, biased.constants)
+    without = study.state_space(study.start_values(), study.constants)
+    np.testing.assert_array_equal(with_biases.a_matrix, without.a_matrix)
+    np.testing.assert_array_equal(with_biases.b_matrix[:, :1], without.b_matrix)
+    np.testing.assert_array_equal(with_biases.b_matrix[:, 1], [0.3, -0.05, 0.04, 0.02])
+
+
+def test_nuisance_must_be_a_boolean_and_not_every_free_parameter(tmp_path):
+    text = MINIMAL.replace("upper = 0.0 }", 'upper = 0.0, nuisance = "yes" }')
+    with pytest.raises(UserInputError, match=r"\[parameters\]\.a\.nuisance: must be true or"):
+        load_model(write_model(tmp_path, text))
+    text = MINIMAL.replace("upper = 0.0 }", "upper = 0.0, nuisance = true }")
+    text = text.replace("b = 0.5", "b = { start = 0.5, nuisance = true }")
+    with pytest.raises(UserInputError, match=r"every free parameter is a nuisance parameter"):
+        load_model(write_model(tmp_path, text))
+    text = MINIMAL.replace("upper = 0.0 }", "upper = 0.0, nuisance = true }")
+    model = load_model(write_model(tmp_path, text))
+    assert model.derivative_names == ("b",) and model.free_parameter_names == ("a", "b")
+
+
 def test_the_delfly_preset_is_the_simulators_linear_model():
     """With the simulator's derivatives and trim, the preset's A and B equal linearise()'s."""
     linear = linearise(study_configuration("S3", 98))
