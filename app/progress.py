@@ -91,8 +91,10 @@ class Progress:
 
     def stage(self, name: str) -> None:
         """A new stage (e.g. ``"tail change"``): a line naming it at once when stderr is not a terminal."""
-        if not self.terminal:
-            self._line(self.clock(), None, name)
+        if (
+            not self.terminal
+        ):  # no estimate of the time left: the caller's own estimate comes with updates
+            self._line(self.clock(), None, name, estimate=False)
 
     def message(self, text: str) -> None:
         """A line the user must see (a warning), below the bar or among the progress lines."""
@@ -128,9 +130,9 @@ class Progress:
         with contextlib.suppress(OSError):
             self.bar.update(max(self.done - self.bar.pos, 0), item or None)
 
-    def _line(self, now: float, eta_s: float | None, note: str = "") -> None:
+    def _line(self, now: float, eta_s: float | None, note: str = "", estimate: bool = True) -> None:
         self.last_line_s = now
-        if eta_s is None and 0 < self.done < self.total:
+        if estimate and eta_s is None and 0 < self.done < self.total:
             eta_s = (now - self.started_s) / self.done * (self.total - self.done)
         parts = [f"{_utc_now_text()} {self.label}: {self.done}/{self.total} {self.unit}"]
         if eta_s is not None and self.done < self.total:

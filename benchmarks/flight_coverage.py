@@ -48,6 +48,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ornitail.core.errors import UserInputError
+from ornitail.core.normal_quantiles import NORMAL_QUANTILE_95
 from ornitail.flight.averaged_models import (
     covariance_weighted_mean,
     time_averaged_response,
@@ -70,7 +71,6 @@ from ornitail.sim.configuration import study_configuration
 from ornitail.sim.dynamics import linearise
 
 SIGMA_KINDS = ("morelli", "morelli_small_sample", "tapered", "cramer_rao")
-Z_95 = 1.959963984540054  # two-sided 95 % normal quantile
 TARGET_POOLED = (0.90, 0.98)
 REPRESENTATIVE_TARGET_PARAMETERS = ("Mq", "Mde", "Xu", "Mu")
 REPRESENTATIVE_TARGET = 0.90
@@ -250,8 +250,8 @@ def clustered_coverage(covered: Sequence[np.ndarray]) -> dict[str, float]:
         error = math.nan
     return {
         "coverage": float(coverage),
-        "low": float(coverage - Z_95 * error),
-        "high": float(coverage + Z_95 * error),
+        "low": float(coverage - NORMAL_QUANTILE_95 * error),
+        "high": float(coverage + NORMAL_QUANTILE_95 * error),
         "intervals": int(total),
     }
 
@@ -267,7 +267,7 @@ def covered(record: FlightRecord, kind: str, rows: np.ndarray | None = None) -> 
     if rows is not None:
         z = z[rows]
     with np.errstate(invalid="ignore"):
-        return np.abs(z) <= Z_95
+        return np.abs(z) <= NORMAL_QUANTILE_95
 
 
 def summarise(
@@ -315,7 +315,7 @@ def summarise(
                     ]
                 )
                 with np.errstate(invalid="ignore"):
-                    hits = np.abs(z) <= Z_95
+                    hits = np.abs(z) <= NORMAL_QUANTILE_95
                 finite = z[np.isfinite(z)]
                 by_parameter[name][group] = {
                     "coverage": float(np.mean(hits)),

@@ -38,20 +38,6 @@ STATE_AXES = (  # column, label, factor from SI to the drawn unit
     ("w_m_s", r"$\Delta w$ [m/s]", 1.0),
     ("theta_rad", r"$\Delta\theta$ [deg]", 180 / math.pi),
 )
-PARAMETER_UNITS = {
-    "Mq": "N m s/rad",
-    "Mu": "N s",
-    "Mw": "N s",
-    "Xq": "N s/rad",
-    "Xu": "N s/m",
-    "Xw": "N s/m",
-    "Zq": "N s/rad",
-    "Zu": "N s/m",
-    "Zw": "N s/m",
-    "Mde": "N m/rad",
-    "Xde": "N/rad",
-    "Zde": "N/rad",
-}
 
 plt.rcParams.update(
     {
@@ -318,7 +304,7 @@ def parameter_spread_plot(result: ConfigurationResult, directory: Path) -> list[
                 linewidth=1.4,
                 label="simulator",
             )
-        ax.set_title(f"{name} [{PARAMETER_UNITS.get(name, '-')}]")
+        ax.set_title(f"{name} [{result.spec.parameter(name).unit or '-'}]")  # the model file's unit
         ax.ticklabel_format(axis="y", style="sci", scilimits=(-2, 2))
         ax.set_xlim(0.3, len(result.models) + 0.7)
     for ax in axes.flat[len(names) :]:

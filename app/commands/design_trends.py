@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -42,17 +43,26 @@ def _prediction_vector(options: dict[str, float | None]) -> tuple[float, ...] | 
     return tuple(given[name] / 1000.0 for name in _PREDICT_OPTIONS)
 
 
+def _at_the_edge(name: str) -> tuple[str, float]:
+    """A quantity's name and factor as the text shows it: angles in degrees (``theta_ss_rad`` -> ``theta_ss_deg``)."""
+    if name.endswith("_rad"):
+        return name[: -len("_rad")] + "_deg", math.degrees(1.0)
+    return name, 1.0
+
+
 def _render(result: dict[str, Any]) -> str:
     lines = []
-    for name, trend in result["trends"].items():
+    for quantity, trend in result["trends"].items():
+        name, scale = _at_the_edge(quantity)
         coefficients = "  ".join(
-            f"{feature} {item['value']:+.4g}+-{item['sigma']:.2g}"
+            f"{feature} {item['value'] * scale:+.4g}+-{item['sigma'] * scale:.2g}"
             for feature, item in trend["coefficients"].items()
+            if feature not in trend["fixed_features"]  # not fitted: said on its own line
         )
         lines.append(
             f"{name:13s} {trend['weighting'].upper()} n={trend['observation_count']} "
-            f"dof={trend['degrees_of_freedom']} residual sigma {trend['residual_sigma']:.3g} "
-            f"LOO RMSE {trend['loo_rmse']:.3g}  [{', '.join(trend['sources'])}]"
+            f"dof={trend['degrees_of_freedom']} residual sigma {trend['residual_sigma'] * scale:.3g} "
+            f"LOO RMSE {trend['loo_rmse'] * scale:.3g}  [{', '.join(trend['sources'])}]"
         )
         lines.append(f"{'':13s} {coefficients}")
         if trend["fixed_features"]:
@@ -62,9 +72,11 @@ def _render(result: dict[str, Any]) -> str:
         lines.append(f"{name:13s} not fitted: {reason}")
     if result.get("prediction"):
         lines.append("prediction (value, 1 sigma mean trend, 1 sigma new flight, extrapolation):")
-        for name, item in result["prediction"]["quantities"].items():
+        for quantity, item in result["prediction"]["quantities"].items():
+            name, scale = _at_the_edge(quantity)
             lines.append(
-                f"  {name:13s} {item['value']:+.5g}  +-{item['sigma_mean']:.3g}  +-{item['sigma_new']:.3g}"
+                f"  {name:13s} {item['value'] * scale:+.5g}  +-{item['sigma_mean'] * scale:.3g}"
+                f"  +-{item['sigma_new'] * scale:.3g}"
                 f"  Mahalanobis {item['extrapolation_mahalanobis']:.2f}  {item['extrapolation_note']}"
             )
     lines += [f"wrote {path}" for path in result["written"]]

@@ -46,7 +46,16 @@ def trim_summary(tail: str, x_h_mm: float) -> dict[str, Any]:
         "damping_ratio": model.oscillatory_damping_ratio(),
         "natural_frequency_rad_s": model.oscillatory_natural_frequency_rad_s(),
         "derivatives": model.derivatives,
+        "derivative_units": _derivative_units(model.derivatives),
     }
+
+
+def _derivative_units(derivatives: dict[str, float]) -> dict[str, str]:
+    """The unit of each derivative, as the study's model file declares it (flight/models/delfly_longitudinal)."""
+    from ornitail.flight.model_file import load_model
+
+    spec = load_model("delfly_longitudinal")
+    return {name: spec.parameter(name).unit for name in derivatives if name in spec.parameter_names}
 
 
 def _write_trim_pictures(result: dict[str, Any], out_dir: Path) -> list[str]:
@@ -80,9 +89,13 @@ def _render_trim(result: dict[str, Any]) -> str:
         f"eigenvalues [1/s]: {poles}",
         f"damping ratio {result['damping_ratio']:.3f}  natural frequency "
         f"{result['natural_frequency_rad_s']:.3f} rad/s",
-        "derivatives (SI, body frame of docs/frames.md):",
+        "derivatives (body frame of docs/frames.md):",
     ]
-    lines += [f"  {name:4s} {value: .4e}" for name, value in result["derivatives"].items()]
+    units = result["derivative_units"]
+    lines += [
+        f"  {name:4s} {value: .4e} {units.get(name, '')}".rstrip()
+        for name, value in result["derivatives"].items()
+    ]
     lines += [f"wrote {path}" for path in result.get("written", [])]
     return "\n".join(lines)
 

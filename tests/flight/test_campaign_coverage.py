@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 from flight_coverage import covariances_at_estimate
 
+from ornitail.core.normal_quantiles import NORMAL_QUANTILE_95
 from ornitail.flight.campaign import ConfigurationResult, run_campaign
 from ornitail.flight.campaign_file import CampaignSpec, configuration_from_label
 from ornitail.sim.configuration import study_configuration
@@ -30,7 +31,6 @@ TAILS = ("S1", "S5")
 X_H_MM = 98
 MANOEUVRES = 20
 SEEDS = (11, 12)  # campaign seeds: S1 flies with the seed, S5 with seed + 1
-Z_95 = 1.959963984540054
 # Statistics of the bands. Intervals of one flight are correlated (shared steady state and gusts;
 # the 12 derivatives of a manoeuvre share its residuals), so the unit of independence is the
 # flight. Over the benchmark's 40 flights per tail (bias model, m_colores):
@@ -98,7 +98,7 @@ def _normalised_errors(results: list[ConfigurationResult], kind: str) -> tuple[t
 def _covered(z: np.ndarray) -> np.ndarray:
     """|z| <= 1.96; a NaN sigma (negative colored variance) forms no interval: not covered."""
     with np.errstate(invalid="ignore"):
-        return np.abs(z) <= Z_95
+        return np.abs(z) <= NORMAL_QUANTILE_95
 
 
 def test_the_campaign_fits_derivatives_with_nuisance_biases(campaigns):
@@ -138,7 +138,7 @@ def test_small_sample_intervals_are_too_wide_on_model_structure_residuals(campai
             covariance = covariances_at_estimate(model.result, model.manoeuvre.deviations)
             sigma = np.sqrt(np.diag(covariance["morelli_small_sample"]))
             errors = model.values - np.array([truth[name] for name in model.parameter_names])
-            covered.append(np.abs(errors) <= Z_95 * sigma)
+            covered.append(np.abs(errors) <= NORMAL_QUANTILE_95 * sigma)
     assert np.mean(covered) > UPPER_POOLED
 
 

@@ -21,6 +21,7 @@ import pytest
 from flight_coverage import covariances_at_estimate
 from scipy.signal import butter, cont2discrete, dlsim, sosfiltfilt
 
+from ornitail.core.normal_quantiles import NORMAL_QUANTILE_95
 from ornitail.flight.identify import identify
 from ornitail.flight.model_file import PRESET_DIRECTORY, load_model
 from ornitail.flight.output_error import OutputErrorOptions
@@ -36,7 +37,6 @@ RATE_HZ = 128.0
 DURATION_S = 4.5
 NOISE = np.array([0.03, 0.02, 0.02, 0.003])  # q rad/s, u and w m/s, theta rad (FlightPlan's)
 BIASES = {"bq": 0.3, "bu": -0.05, "bw": 0.04, "btheta": 0.02}  # rad/s^2, m/s^2, m/s^2, rad/s
-Z_95 = 1.959963984540054
 # Seed count and band. The unit of independence is the record (its 12 intervals share one noise
 # realisation). Measured with this generator: 86 of 100 records converge; the per-record coverage
 # of the small-sample intervals scatters with sd 0.087, so the pooled coverage has an sd of
@@ -122,7 +122,7 @@ def monte_carlo(model):
 
 
 def _coverage(errors: np.ndarray, sigmas: np.ndarray) -> float:
-    return float(np.mean(np.abs(errors) <= Z_95 * sigmas))
+    return float(np.mean(np.abs(errors) <= NORMAL_QUANTILE_95 * sigmas))
 
 
 def test_most_records_converge(monte_carlo):
