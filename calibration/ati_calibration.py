@@ -32,6 +32,8 @@ from ornitail.core.hashing import content_hash_of_bytes
 
 WRENCH_COMPONENT_NAMES = ("fx", "fy", "fz", "tx", "ty", "tz")
 WRENCH_COMPONENT_UNITS = ("N", "N", "N", "N m", "N m", "N m")
+WRENCH_COMPONENT_KEYS = ("fx_n", "fy_n", "fz_n", "tx_n_m", "ty_n_m", "tz_n_m")
+"""The components as keys of printed JSON, each carrying its unit."""
 
 
 def _si_row_factors(contents: AtiCalFileContents, source: str) -> np.ndarray:
@@ -208,7 +210,7 @@ class AtiCalibration:
             "axis_names": list(AXIS_NAMES),
             "output_units": list(WRENCH_COMPONENT_UNITS),
             "matrix_si_per_volt": self.matrix_si.tolist(),
-            "ranges_si": dict(zip(WRENCH_COMPONENT_NAMES, self.ranges_si.tolist(), strict=True)),
+            "rated_ranges": dict(zip(WRENCH_COMPONENT_KEYS, self.ranges_si.tolist(), strict=True)),
             "tool_transform_mm_deg": self.tool_transform.as_mm_deg(),
             "content_hash": self.content_hash,
         }

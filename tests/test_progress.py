@@ -37,7 +37,9 @@ def test_lines_every_interval_from_the_start_at_a_stage_and_at_the_end():
     lines = stream.getvalue().splitlines()
     assert all(LINE.match(line) and PROGRESS_LINE.match(line) for line in lines), lines
     assert [LINE.match(line).group(1) for line in lines] == ["1", "2", "4"]
-    assert lines[0].endswith("1/4 set points, tail change")  # a stage line makes no estimate of its own
+    assert lines[0].endswith(
+        "1/4 set points, tail change"
+    )  # a stage line makes no estimate of its own
     assert lines[1].endswith("2/4 set points, eta 6 s, theta 28 deg")  # 6 s for 2 points
     assert lines[2].endswith("4/4 set points")
 

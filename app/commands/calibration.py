@@ -47,6 +47,7 @@ def convert_command(
     import numpy as np
 
     from ornitail.calibration.ati_calibration import (
+        WRENCH_COMPONENT_KEYS,
         WRENCH_COMPONENT_NAMES,
         WRENCH_COMPONENT_UNITS,
         AtiCalibration,
@@ -69,12 +70,14 @@ def convert_command(
             f"volts {volts!r} minus bias {bias!r} give forces too large to represent "
             "(not finite); gauge voltages are a few volts",
         )
-    result = dict(zip(WRENCH_COMPONENT_NAMES, wrench.tolist(), strict=True))
+    result = dict(zip(WRENCH_COMPONENT_KEYS, wrench.tolist(), strict=True))
 
     def render(values: dict) -> str:
         return "\n".join(
-            f"{name:>3}  {values[name]: .6g} {unit}"
-            for name, unit in zip(WRENCH_COMPONENT_NAMES, WRENCH_COMPONENT_UNITS, strict=True)
+            f"{name:>3}  {values[key]: .6g} {unit}"
+            for name, key, unit in zip(
+                WRENCH_COMPONENT_NAMES, WRENCH_COMPONENT_KEYS, WRENCH_COMPONENT_UNITS, strict=True
+            )
         )
 
     emit(result, as_json, render)
@@ -86,7 +89,11 @@ def convert_command(
 def show_command(cal_path: Path, as_json: bool) -> None:
     """Show an ATI calibration: serial, units, SI matrix, rated ranges and content hash."""
     from ornitail.calibration.ati_cal_file import AXIS_NAMES
-    from ornitail.calibration.ati_calibration import WRENCH_COMPONENT_UNITS, AtiCalibration
+    from ornitail.calibration.ati_calibration import (
+        WRENCH_COMPONENT_NAMES,
+        WRENCH_COMPONENT_UNITS,
+        AtiCalibration,
+    )
 
     summary = AtiCalibration.from_file(cal_path).summary()
 
@@ -105,8 +112,11 @@ def show_command(cal_path: Path, as_json: bool) -> None:
         for name, row in zip(AXIS_NAMES, values["matrix_si_per_volt"], strict=True):
             lines.append(f"  {name}  " + "".join(f"{value:13.5e}" for value in row))
         lines.append("rated ranges:")
-        for (name, value), unit in zip(
-            values["ranges_si"].items(), WRENCH_COMPONENT_UNITS, strict=True
+        for name, value, unit in zip(
+            WRENCH_COMPONENT_NAMES,
+            values["rated_ranges"].values(),
+            WRENCH_COMPONENT_UNITS,
+            strict=True,
         ):
             lines.append(f"  {name}  {value:g} {unit}")
         return "\n".join(lines)

@@ -41,7 +41,7 @@ def test_convert_json_equals_the_library_result(run_ornitail, cal_file_path):
     )
     assert result.exit_code == 0, result.output
     values = json.loads(result.stdout)
-    assert list(values) == ["fx", "fy", "fz", "tx", "ty", "tz"]
+    assert list(values) == ["fx_n", "fy_n", "fz_n", "tx_n_m", "ty_n_m", "tz_n_m"]
     calibration = AtiCalibration.from_file(path).with_tool_transform(
         ToolTransform.from_mm_deg(1, 2, 30, 0, 0, 90)
     )
@@ -77,13 +77,13 @@ def test_show_json(run_ornitail, cal_file_path):
     values = json.loads(result.stdout)
     assert values["serial"] == "FT8884"
     assert values["file_units"] == {"force": "N", "torque": "N-mm", "distance": "mm"}
-    assert values["ranges_si"] == {
-        "fx": 50.0,
-        "fy": 50.0,
-        "fz": 70.0,
-        "tx": 0.5,
-        "ty": 0.5,
-        "tz": 0.5,
+    assert values["rated_ranges"] == {
+        "fx_n": 50.0,
+        "fy_n": 50.0,
+        "fz_n": 70.0,
+        "tx_n_m": 0.5,
+        "ty_n_m": 0.5,
+        "tz_n_m": 0.5,
     }
     assert values["matrix_si_per_volt"][0][0] == pytest.approx(
         0.01075 / 5.41651440383645, rel=1e-15
@@ -317,7 +317,7 @@ def test_real_console_script_converts_and_refuses(cal_file_path):
         check=False,
     )
     assert ok.returncode == 0, ok.stderr
-    assert set(json.loads(ok.stdout)) == {"fx", "fy", "fz", "tx", "ty", "tz"}
+    assert set(json.loads(ok.stdout)) == {"fx_n", "fy_n", "fz_n", "tx_n_m", "ty_n_m", "tz_n_m"}
     bad = subprocess.run(
         [
             _console_script(),
