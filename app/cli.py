@@ -129,7 +129,6 @@ _AREA_COMMANDS = {
     "flight": LazyCommand(
         "ornitail.app.commands.flight:flight_group",
         "Free-flight system identification.",
-        extras=("ornitail.app.commands.flight_campaign:campaign_command",),
     ),
     "gap": LazyCommand(
         "ornitail.app.commands.gap:gap_group",

@@ -58,6 +58,7 @@ def test_importing_the_cli_imports_no_heavy_library():
         ("runs",),
         ("gui",),
         ("demo",),
+        ("flight",),
     ],
 )
 def test_help_imports_no_heavy_library(arguments):
@@ -74,7 +75,7 @@ def test_help_imports_no_heavy_library(arguments):
 
 
 @pytest.mark.parametrize("columns", [60, 80, 200])
-@pytest.mark.parametrize("group", ["", "design"])
+@pytest.mark.parametrize("group", ["", "design", "flight"])
 def test_help_lists_every_command_as_the_loaded_commands_describe_themselves(group, columns):
     arguments = [*group.split(), "--help"]
     lazy = run_python(
@@ -95,7 +96,11 @@ def test_help_lists_every_command_as_the_loaded_commands_describe_themselves(gro
     assert lazy.stdout == loaded.stdout
     listed = lazy.stdout.split("Commands:\n", 1)[1].splitlines()
     names = {line.split()[0] for line in listed if line.startswith("  ") and line[2] != " "}
-    assert names == (COMMANDS if not group else {"geometry", "pareto", "propose", "trends"})
+    subcommands = {
+        "design": {"geometry", "pareto", "propose", "trends"},
+        "flight": {"identify", "campaign"},
+    }
+    assert names == (COMMANDS if not group else subcommands[group])
 
 
 def test_every_command_loads_and_flight_keeps_its_campaign_command():
