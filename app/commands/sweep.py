@@ -8,19 +8,8 @@ from pathlib import Path
 
 import click
 
-from ornitail.acquisition.catalog import default_data_root
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE
-from ornitail.acquisition.sweep import SweepStop
 from ornitail.app.cli_output import emit, json_option
-from ornitail.app.sweep_session import (
-    SweepSignals,
-    check_time_scale_option,
-    exit_code_of,
-    guarded,
-    render_sweep_result,
-    run_sweep_with_progress,
-    sweep_result_record,
-)
 
 
 @click.command("sweep")
@@ -63,6 +52,19 @@ def sweep_command(
     record each point. First Ctrl-C finishes the current point and stops; a second, SIGTERM or SIGHUP stops at
     once. Exit codes: 0 completed, 2 input error, 3 instrument failed, 4 incomplete, 5 rig or chain in use,
     130 Ctrl-C, 143 SIGTERM, 129 SIGHUP."""
+    # imported here: `ornitail sweep --help` needs none of the recorder's libraries
+    from ornitail.acquisition.catalog import default_data_root
+    from ornitail.acquisition.sweep import SweepStop
+    from ornitail.app.sweep_session import (
+        SweepSignals,
+        check_time_scale_option,
+        exit_code_of,
+        guarded,
+        render_sweep_result,
+        run_sweep_with_progress,
+        sweep_result_record,
+    )
+
     signals = SweepSignals(SweepStop()).install()  # kept to the end: later signals are only noted
     check_time_scale_option(time_scale)
     result = guarded(
