@@ -45,7 +45,11 @@ def representative_record(result: ConfigurationResult) -> dict[str, Any]:
     configuration, steady = result.configuration, result.steady_state
     representative = result.representative
     derivatives = {
-        name: {"value": float(value), "sigma": float(sigma)}
+        name: {
+            "value": float(value),
+            "sigma": float(sigma),
+            "unit": result.spec.parameter(name).unit,
+        }
         for name, value, sigma in zip(
             representative.parameter_names,
             representative.estimate.values,
