@@ -28,6 +28,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from ornitail.flight.model_file import StateSpaceModelSpec
+from ornitail.flight.model_functions import compiled_function, matrices_function, symbolic_matrices
 
 TAYLOR_DEGREE = 12
 SCALED_NORM_LIMIT = 0.5
@@ -94,30 +95,34 @@ def _symbolic_hold(
 
 def _discretisation_function(spec: StateSpaceModelSpec, squarings: int) -> casadi.Function:
     key = f"{spec.input_hold}_{squarings}"
-    if key not in spec._functions:
+
+    def build() -> casadi.Function:
         parameters = casadi.SX.sym("p", len(spec.parameters))
         constants = casadi.SX.sym("c", len(spec.constant_names))
         time_step = casadi.SX.sym("dt")
-        a, b, c, d = spec.symbolic_matrices(parameters, constants)
+        a, b, c, d = symbolic_matrices(spec, parameters, constants)
         ad, bd, bd_next = _symbolic_hold(a, b, time_step, squarings, spec.input_hold)
         outputs = []
         for matrix in (ad, bd, bd_next, c, d):
             outputs += [matrix, casadi.jacobian(casadi.vec(matrix), parameters)]
-        spec._functions[key] = casadi.Function(key, [parameters, constants, time_step], outputs)
-    return spec._functions[key]
+        return casadi.Function(key, [parameters, constants, time_step], outputs)
+
+    return compiled_function(spec, key, build)
 
 
 def continuous_jacobian_function(spec: StateSpaceModelSpec) -> casadi.Function:
     """CasADi Function (parameters, constants) -> (A, B, C, D, dvec(A)/dp, ..., dvec(D)/dp)."""
-    if "continuous_jacobian" not in spec._functions:
+
+    def build() -> casadi.Function:
         parameters = casadi.SX.sym("p", len(spec.parameters))
         constants = casadi.SX.sym("c", len(spec.constant_names))
-        matrices = spec.symbolic_matrices(parameters, constants)
+        matrices = symbolic_matrices(spec, parameters, constants)
         jacobians = [casadi.jacobian(casadi.vec(matrix), parameters) for matrix in matrices]
-        spec._functions["continuous_jacobian"] = casadi.Function(
+        return casadi.Function(
             "continuous_jacobian", [parameters, constants], [*matrices, *jacobians]
         )
-    return spec._functions["continuous_jacobian"]
+
+    return compiled_function(spec, "continuous_jacobian", build)
 
 
 def _derivative_stack(jacobian: casadi.DM, shape: tuple[int, int]) -> np.ndarray:
@@ -137,7 +142,7 @@ def discretise(
     (:attr:`constant_names` order).
     """
     a, b, _, _ = (
-        np.asarray(matrix) for matrix in spec.matrices_function()(parameter_vector, constant_vector)
+        np.asarray(matrix) for matrix in matrices_function(spec)(parameter_vector, constant_vector)
     )
     squarings = _squarings_needed(a, b, time_step_s, spec.input_hold)
     values = _discretisation_function(spec, squarings)(

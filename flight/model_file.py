@@ -13,11 +13,10 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-import casadi
 import numpy as np
 
 from ornitail.core.errors import UserInputError
@@ -30,7 +29,6 @@ INITIAL_STATE_RULES = ("estimate", "data", "zero")
 INPUT_HOLDS = ("first_order", "zero_order")
 DATA_STATISTICS = ("mean", "median", "first")
 MATRIX_NAMES = ("A", "B", "C", "D")
-CASADI_FUNCTIONS = {name: getattr(casadi, name) for name in FUNCTION_NAMES}
 _NAME_PATTERN = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 
 
@@ -96,7 +94,6 @@ class StateSpaceModelSpec:
     initial_state: str = "estimate"
     input_hold: str = "first_order"
     description: str = ""
-    _functions: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
 
     @property
     def parameter_names(self) -> tuple[str, ...]:
@@ -191,36 +188,6 @@ class StateSpaceModelSpec:
         rows = {"A": self.states, "B": self.states, "C": self.outputs, "D": self.outputs}
         columns = {"A": self.states, "B": self.inputs, "C": self.states, "D": self.inputs}
         return len(rows[matrix_name]), len(columns[matrix_name])
-
-    def symbolic_matrices(
-        self, parameters: casadi.SX, constants: casadi.SX
-    ) -> tuple[casadi.SX, casadi.SX, casadi.SX, casadi.SX]:
-        """A, B, C, D as CasADi SX of ``parameters`` (all, in file order) and ``constants``
-        (in :attr:`constant_names` order).
-        """
-        values = {name: parameters[index] for index, name in enumerate(self.parameter_names)}
-        values.update({name: constants[index] for index, name in enumerate(self.constant_names)})
-        result = []
-        for matrix_name in MATRIX_NAMES:
-            rows, columns = self.matrix_shape(matrix_name)
-            matrix = casadi.SX.zeros(rows, columns)
-            for row_index, row in enumerate(self.matrices[matrix_name]):
-                for column_index, entry in enumerate(row):
-                    matrix[row_index, column_index] = entry.evaluate(values, CASADI_FUNCTIONS)
-            result.append(matrix)
-        return tuple(result)
-
-    def matrices_function(self) -> casadi.Function:
-        """Cached CasADi Function (parameters, constants) -> (A, B, C, D)."""
-        if "matrices" not in self._functions:
-            parameters = casadi.SX.sym("p", len(self.parameters))
-            constants = casadi.SX.sym("c", len(self.constant_names))
-            self._functions["matrices"] = casadi.Function(
-                "matrices",
-                [parameters, constants],
-                list(self.symbolic_matrices(parameters, constants)),
-            )
-        return self._functions["matrices"]
 
 
 def _finite_entry(entry: Expression, values: Mapping[str, float]) -> float:

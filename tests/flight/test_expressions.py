@@ -7,7 +7,7 @@ import pytest
 
 from ornitail.core.errors import UserInputError
 from ornitail.flight.expressions import parse_expression
-from ornitail.flight.model_file import CASADI_FUNCTIONS
+from ornitail.flight.model_functions import CASADI_FUNCTIONS
 
 
 @pytest.mark.parametrize(
