@@ -125,6 +125,21 @@ class Actuator(ABC):
         return None
 
 
+class ConnectedOverOnePort:
+    """``route`` and ``is_open`` of an actuator driven over one connection, ``self.connection`` (its ``port`` path
+    and ``is_open`` flag); mixed in before the role class."""
+
+    connection: Any
+
+    @property
+    def route(self) -> str:
+        return self.connection.port
+
+    @property
+    def is_open(self) -> bool:
+        return self.connection.is_open
+
+
 class TunnelFan(Actuator):
     """The tunnel fan: velocity set point and reading (m/s); its safe state is stopped."""
 

@@ -13,7 +13,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar, Self
 
-from ornitail.acquisition.actuator_interfaces import ActuatorContext, Reading, TunnelFan
+from ornitail.acquisition.actuator_interfaces import (
+    ActuatorContext,
+    ConnectedOverOnePort,
+    Reading,
+    TunnelFan,
+)
 from ornitail.acquisition.fan_speed_map import FanSpeedMap
 from ornitail.acquisition.modbus_rtu import MAX_UNIT_ID, MIN_UNIT_ID
 from ornitail.acquisition.modbus_rtu_connection import PARITIES, ModbusRtuConnection
@@ -83,7 +88,7 @@ class VfdStatus:
     output_frequency_hz: float
 
 
-class ModbusVfdTunnelFan(TunnelFan):
+class ModbusVfdTunnelFan(ConnectedOverOnePort, TunnelFan):
     """Tunnel fan on a variable-frequency drive speaking Modbus RTU.
 
     Parameters
@@ -146,14 +151,6 @@ class ModbusVfdTunnelFan(TunnelFan):
         )
 
     # -- connection -------------------------------------------------------------------------
-    @property
-    def route(self) -> str:
-        return self.connection.port
-
-    @property
-    def is_open(self) -> bool:
-        return self.connection.is_open
-
     def open(self) -> str:
         """Open the port and read the drive's frequency registers (a drive that answers them is identified)."""
         self.connection.open()

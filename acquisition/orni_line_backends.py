@@ -12,6 +12,7 @@ from typing import ClassVar, Self
 
 from ornitail.acquisition.actuator_interfaces import (
     ActuatorContext,
+    ConnectedOverOnePort,
     FlappingMotor,
     PitchStrut,
     Reading,
@@ -33,19 +34,11 @@ def identity_fields(reply: str) -> dict[str, str]:
     return dict(word.split("=", 1) for word in reply.split()[1:] if "=" in word)
 
 
-class _OrniLineCommon:
+class _OrniLineCommon(ConnectedOverOnePort):
     """What the three ORNI line backends share (mixed into the line drivers)."""
 
     model: str
     connection: LineInstrumentConnection
-
-    @property
-    def route(self) -> str:
-        return self.connection.port
-
-    @property
-    def is_open(self) -> bool:
-        return self.connection.is_open
 
     def identity_problem(self, identity: str, rig_file_key: str) -> str | None:
         model = identity_fields(identity).get("model")

@@ -13,7 +13,12 @@ import time
 from dataclasses import dataclass
 from typing import ClassVar, Self
 
-from ornitail.acquisition.actuator_interfaces import ActuatorContext, PitchStrut, Reading
+from ornitail.acquisition.actuator_interfaces import (
+    ActuatorContext,
+    ConnectedOverOnePort,
+    PitchStrut,
+    Reading,
+)
 from ornitail.acquisition.instrument_errors import InstrumentReplyError
 from ornitail.acquisition.line_instrument_connection import LineInstrumentConnection
 from ornitail.acquisition.serial_port_access import printable_excerpt
@@ -75,7 +80,7 @@ class ZaberAxisState:
     warning: str
 
 
-class ZaberAsciiStrut(PitchStrut):
+class ZaberAsciiStrut(ConnectedOverOnePort, PitchStrut):
     """Pitch strut on axis ``settings.axis`` of Zaber device ``settings.device``.
 
     Parameters
@@ -162,14 +167,6 @@ class ZaberAsciiStrut(PitchStrut):
         return reply
 
     # -- connection -------------------------------------------------------------------------
-    @property
-    def route(self) -> str:
-        return self.connection.port
-
-    @property
-    def is_open(self) -> bool:
-        return self.connection.is_open
-
     def open(self) -> str:
         """Open the port, drain it, ask ``get device.id``; return ``"Zaber device 1 axis 1 device.id=..."``."""
         self.connection.open()
