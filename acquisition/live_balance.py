@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ornitail.acquisition.balance_interface import BalanceStream
 from ornitail.acquisition.counter_gaps import CounterGap, find_counter_gaps
 from ornitail.acquisition.daq_protocol import ANALOG_CHANNEL_COUNT, CHANNEL_NAMES
 from ornitail.acquisition.recorder import DisplayFeed, Recorder
@@ -31,7 +32,6 @@ from ornitail.acquisition.recording_layout import (
     StreamLayout,
 )
 from ornitail.acquisition.rig import Rig
-from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
 from ornitail.core.errors import UserInputError
 
 GET_BLOCK_TIMEOUT_S = 0.1
@@ -122,12 +122,13 @@ class _Measurement:
 
 
 class LiveBalance:
-    """Stream the rig's serial DAQ balance for a display, and into a recorder while one is attached.
+    """Stream the rig's balance for a display, and into a recorder while one is attached.
 
     Parameters
     ----------
     rig : Rig
-        A connected rig whose balance route is ``serial_daq``.
+        A connected rig whose balance stream carries the Hall line, hot-wire and thermocouple with the gauges (the
+        ORNI-DAQ9 route, or a CAN balance with ``[balance.aux_daq]``).
     display_decimation : int
         Every n-th row goes to :attr:`display_feed` (display only; the recorder gets every row).
     display_capacity_blocks : int
@@ -141,15 +142,16 @@ class LiveBalance:
         display_capacity_blocks: int = 512,
         sample_rate_hz: float | None = None,
     ):
-        if not isinstance(rig.balance, SerialDaqDriver):
+        if rig.balance is None or not rig.balance.carries_flap_channels:
             raise UserInputError(
                 f"{rig.description.path}: [balance].route",
-                'the live view streams the serial DAQ (Hall line and hot-wire included); use route = "serial_daq"',
+                "the live view streams the Hall line and hot-wire with the balance; use route = "
+                '"serial_daq", or add the serial board beside the CAN balance as [balance.aux_daq]',
             )
         self.rig = rig
-        self.driver: SerialDaqDriver = rig.balance
+        self.driver: BalanceStream = rig.balance
         self.display_feed = DisplayFeed(display_decimation, display_capacity_blocks)
-        self.sample_rate_hz = float(sample_rate_hz or rig.description.serial_daq.sample_rate_hz)
+        self.sample_rate_hz = float(sample_rate_hz or rig.description.balance_sample_rate_hz())
         self.error: BaseException | None = None
         self._recorder: Recorder | None = None
         self._measurement: _Measurement | None = None
@@ -184,10 +186,7 @@ class LiveBalance:
         self.error = None
         self._first_counter = None
         self.rig.start_balance(self.sample_rate_hz)
-        identity = self.driver.identity
-        assert identity is not None
-        volts_per_count = np.asarray(identity.volts_per_count)
-        self._clip_low_v, self._clip_high_v = -32768 * volts_per_count, 32767 * volts_per_count
+        self._clip_low_v, self._clip_high_v = self.driver.adc_limits_v()
         self._stop.clear()
         self._thread = threading.Thread(target=self._pump, name="live-balance", daemon=True)
         self._thread.start()
@@ -209,7 +208,7 @@ class LiveBalance:
     def _pump(self) -> None:
         try:
             while not self._stop.is_set():
-                block = self.driver.get_block(timeout_s=GET_BLOCK_TIMEOUT_S)
+                block = self.driver.read_block(timeout_s=GET_BLOCK_TIMEOUT_S)
                 if block is None:
                     continue
                 self._deliver(block.counters, block.volts, block.saturated)
@@ -282,7 +281,7 @@ class LiveBalance:
         if leading:
             with self._report_lock:
                 crc, lost, garbage, resyncs = self._reported
-                newly_lost = self.driver.statistics.lost_samples - lost
+                newly_lost = self.driver.link_counts().lost_samples - lost
                 self._reported = (crc, lost + min(leading, max(0, newly_lost)), garbage, resyncs)
 
     def _report_link_health(self, recorder: Recorder) -> None:
@@ -298,7 +297,7 @@ class LiveBalance:
                 self._reported = counts
 
     def _link_counts(self) -> tuple[int, int, int, int]:
-        statistics = self.driver.statistics
+        statistics = self.driver.link_counts()
         return (
             statistics.crc_failures,
             statistics.lost_samples,
@@ -394,10 +393,15 @@ class LiveBalance:
             last_row_index=None if first is None else first + measurement.rows - 1,
         )
 
+    def alignment_values(self) -> dict[str, float | int]:
+        """The balance stream's alignment of its devices now, for a set point's journal entry (empty for one
+        device)."""
+        return self.driver.alignment_values()
+
     # -- status -----------------------------------------------------------------------------
     def health(self) -> LinkHealth:
         """Link health and clipping since the stream started (recorder losses over every recording)."""
-        statistics = self.driver.statistics
+        statistics = self.driver.link_counts()
         recorder = self._recorder
         recorder_lost = self._recorder_lost_before + (
             recorder.queue_lost_samples if recorder is not None else 0

@@ -38,6 +38,7 @@ import queue
 import threading
 import time
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import can
@@ -71,7 +72,7 @@ class GaugeReading:
 class GaugeBlock:
     """Consecutive polled samples.
 
-    host_time_s : (n,) ``time.monotonic()`` when each request was sent, s.
+    host_time_s : (n,) the driver's ``clock()`` (default ``time.monotonic()``) when each request was sent, s.
     status_words : (n,) uint16.
     gauges : (n, 6) int16 raw gauge counts.
     saturated : (n, 6) bool, gauge at -32768 or +32767.
@@ -103,6 +104,10 @@ class NetCanOemDriver:
         Instrument name used in error messages.
     reply_timeout_s : float
         How long to wait for each reply, s.
+    clock : callable returning s
+        Schedules the polls and stamps each sample (default ``time.monotonic``; the rig passes its rig time).
+    time_scale : float
+        Clock seconds per wall second (``clock`` of a simulated rig runs faster than the wall clock).
     """
 
     def __init__(
@@ -117,7 +122,11 @@ class NetCanOemDriver:
         missed_replies_limit: int = 3,
         block_period_s: float = 0.01,
         queue_blocks: int = 2000,
+        clock: Callable[[], float] = time.monotonic,
+        time_scale: float = 1.0,
     ) -> None:
+        self._clock = clock
+        self._time_scale = float(time_scale)
         self.interface = interface
         self.channel = channel
         self.bit_rate = float(bit_rate)
@@ -498,20 +507,20 @@ class NetCanOemDriver:
         times: list[float] = []
         rows: list[tuple[int, np.ndarray]] = []
         pending: tuple[float, tuple[int, np.ndarray]] | None = None  # confirmed by the next drain
-        next_request_s = time.monotonic()
+        next_request_s = self._clock()
         last_block_s = next_request_s
         missed_in_a_row = 0
         try:
             while not self._stop_polling.is_set():
-                delay = next_request_s - time.monotonic()
+                delay = next_request_s - self._clock()
                 if delay > 0:
-                    time.sleep(delay)
+                    time.sleep(delay / self._time_scale)
                 self._confirm(pending, times, rows)
                 pending = None
                 if times and times[-1] - last_block_s >= self.block_period_s:
                     self._deliver(times, rows)
                     times, rows, last_block_s = [], [], times[-1]
-                sent_s = time.monotonic()
+                sent_s = self._clock()
                 next_request_s = max(next_request_s + period_s, sent_s)
                 self._send(protocol.OPCODE_READ_GAUGES)
                 sample = self._receive_gauge_sample(self.reply_timeout_s)

@@ -33,12 +33,12 @@ from ornitail.acquisition.actuator_interfaces import (
     PitchStrut,
     TunnelFan,
 )
+from ornitail.acquisition.balance_backends import BalanceContext, create_balance
+from ornitail.acquisition.balance_interface import BalanceStream
 from ornitail.acquisition.fan_speed_map import FanSpeedMap
 from ornitail.acquisition.instrument_errors import InstrumentError
-from ornitail.acquisition.netcanoem_driver import NetCanOemDriver
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, RigDescription, read_rig_file
 from ornitail.acquisition.rig_simulator_server import SimulatorControl
-from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
 from ornitail.acquisition.simulated_rig_instruments import SimulatedRigInstruments
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.calibration.tunnel_table import TunnelVelocityTable
@@ -64,7 +64,9 @@ class Rig:
     fan, strut, motor : TunnelFan, PitchStrut, FlappingMotor
         The actuators (whatever backend ``[fan].backend`` etc. chose), set by :meth:`connect`; the rig calls
         them only through these interfaces (:mod:`actuator_interfaces`).
-    balance : SerialDaqDriver | NetCanOemDriver, by ``[balance].route``, set by :meth:`connect`.
+    balance : BalanceStream
+        The balance backend ``[balance].route`` (and ``[balance.aux_daq]``) chose (:mod:`balance_backends`), set
+        by :meth:`connect`; the rig calls it only through :class:`BalanceStream`.
     simulators : SimulatedRigInstruments | None
         The running simulators of a simulated rig (fault injection in tests), else None.
     safe_state_outcome : dict[str, str]
@@ -93,7 +95,7 @@ class Rig:
         self.fan: TunnelFan | None = None
         self.strut: PitchStrut | None = None
         self.motor: FlappingMotor | None = None
-        self.balance: SerialDaqDriver | NetCanOemDriver | None = None
+        self.balance: BalanceStream | None = None
         self.simulators: SimulatedRigInstruments | None = None
         self.simulator_control: SimulatorControl | None = None
         self.safe_state_outcome: dict[str, str] = {}
@@ -160,7 +162,7 @@ class Rig:
 
     def create_drivers(
         self,
-    ) -> tuple[TunnelFan, FlappingMotor, PitchStrut, SerialDaqDriver | NetCanOemDriver]:
+    ) -> tuple[TunnelFan, FlappingMotor, PitchStrut, BalanceStream]:
         """Create (not open) the fan, motor, strut and balance drivers on the rig file's ports, or on the
         simulators' ptys and virtual CAN channel once :meth:`start_simulation` started them; they become
         :attr:`fan`, :attr:`motor`, :attr:`strut` and :attr:`balance`, which :meth:`close` makes safe and closes.
@@ -171,6 +173,7 @@ class Rig:
             "strut": description.strut.port,
             "motor": description.motor.port,
             "daq": description.serial_daq.port,
+            "aux_daq": description.aux_daq.port if description.aux_daq else "",
         }
         can_interface, can_channel = description.can.interface, description.can.channel
         if self.simulators is not None:
@@ -178,6 +181,8 @@ class Rig:
             ports.update(simulators.actuator_ports())
             if simulators.daq_board is not None:
                 ports["daq"] = simulators.daq_board.port_path
+            if simulators.aux_daq_board is not None:
+                ports["aux_daq"] = simulators.aux_daq_board.port_path
             can_interface, can_channel = "virtual", simulators.can_channel or can_channel
         simulated = description.simulated or description.simulator_control is not None
         reply_timeout_s = SIMULATED_REPLY_TIMEOUT_S if simulated else REPLY_TIMEOUT_S
@@ -202,17 +207,18 @@ class Rig:
         self.fan = actuator("fan", "tunnel fan")
         self.motor = actuator("motor", "flapping motor")
         self.strut = actuator("strut", "strut pitch actuator")
-        if description.balance_route == "serial_daq":
-            self.balance = SerialDaqDriver(
-                ports["daq"], baud=description.serial_daq.baud, reply_timeout_s=reply_timeout_s
+        self.balance = create_balance(
+            BalanceContext(
+                description=description,
+                calibration_matrix_si=self.calibration.matrix_si,
+                ports=ports,
+                can_interface=can_interface,
+                can_channel=can_channel,
+                reply_timeout_s=reply_timeout_s,
+                clock=self.now_s,
+                time_scale=self._time_scale,
             )
-        else:
-            self.balance = NetCanOemDriver(
-                interface=can_interface,
-                channel=can_channel,
-                bit_rate=description.can.bit_rate,
-                base_id=description.can.base_id,
-            )
+        )
         return self.fan, self.motor, self.strut, self.balance
 
     def __enter__(self) -> Rig:
@@ -362,6 +368,7 @@ class Rig:
             "actuator_backends": {
                 role: getattr(description, role).backend for role in ("fan", "strut", "motor")
             },
+            **(self.balance.recording_description() if self.balance is not None else {}),
         }
 
     def calibration_files(self) -> dict[str, Path]:
@@ -412,15 +419,9 @@ class Rig:
 
     # -- balance ----------------------------------------------------------------------------
     def start_balance(self, sample_rate_hz: float | None = None) -> None:
-        """Start the DAQ stream or CAN polling at ``sample_rate_hz`` (default: the rig file's)."""
+        """Start the balance stream at ``sample_rate_hz`` (default: the rig file's rate of its route)."""
         balance = self._connected(self.balance)
-        if isinstance(balance, SerialDaqDriver):
-            balance.set_sample_rate(sample_rate_hz or self.description.serial_daq.sample_rate_hz)
-            balance.start()
-            rate_hz = balance.sample_rate_hz
-        else:
-            rate_hz = sample_rate_hz or self.description.can.sample_rate_hz
-            balance.start_polling(rate_hz)
+        rate_hz = balance.start_stream(sample_rate_hz or self.description.balance_sample_rate_hz())
         self._balance_clock = (self.now_s(), float(rate_hz))
 
     def balance_samples_since_start(self) -> int:
@@ -439,7 +440,4 @@ class Rig:
         """Stop the balance stream or polling."""
         balance = self._connected(self.balance)
         self._balance_clock = None
-        if isinstance(balance, SerialDaqDriver):
-            balance.stop()
-        else:
-            balance.stop_polling()
+        balance.stop_stream()

@@ -20,6 +20,7 @@ import can
 from serial.tools import list_ports
 
 from ornitail.acquisition.actuator_interfaces import Actuator
+from ornitail.acquisition.aligned_balance import AlignedBalance
 from ornitail.acquisition.daq_protocol import CHANNEL_NAMES
 from ornitail.acquisition.instrument_errors import (
     InstrumentDisconnected,
@@ -179,13 +180,23 @@ def _start_simulation(rig: Rig) -> InstrumentCheck | None:
 
 def _check_instruments(rig: Rig) -> list[InstrumentCheck]:
     fan, motor, strut, balance = rig.create_drivers()
+    description = rig.description
     if isinstance(balance, SerialDaqDriver):
-        rate_hz = rig.description.serial_daq.sample_rate_hz
-        balance_check = _check_daq_board(balance, rate_hz)
+        balance_checks = [_check_daq_board(balance, description.serial_daq.sample_rate_hz)]
+    elif isinstance(
+        balance, AlignedBalance
+    ):  # a CAN balance and the serial board beside it: one row each
+        assert description.aux_daq is not None
+        balance_checks = [
+            _check_netcanoem(balance.balance),
+            _check_daq_board(
+                balance.aux, description.aux_daq.sample_rate_hz, "[balance.aux_daq].port"
+            ),
+        ]
     else:
-        balance_check = _check_netcanoem(balance)
+        balance_checks = [_check_netcanoem(balance)]
     return [
-        balance_check,
+        *balance_checks,
         _check_actuator(fan, "[fan].port"),
         _check_actuator(strut, "[strut].port"),
         _check_actuator(motor, "[motor].port"),
@@ -244,9 +255,10 @@ def identity_text(reply: str) -> str:
     return reply
 
 
-def _check_daq_board(board: SerialDaqDriver, sample_rate_hz: float) -> InstrumentCheck:
+def _check_daq_board(
+    board: SerialDaqDriver, sample_rate_hz: float, key: str = "[balance.serial_daq].port"
+) -> InstrumentCheck:
     """``STOP`` and ``ID?`` (the driver's open), the rig file's rate, one streamed sample, ``STOP``, close."""
-    key = "[balance.serial_daq].port"
     try:
         identity = board.open()
     except InstrumentError as error:

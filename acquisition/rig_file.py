@@ -23,7 +23,11 @@ from ornitail.core.toml_table import REQUIRED, TomlTable
 from ornitail.vehicle.constants import DELFLY_GEAR_RATIO
 
 DEFAULT_RIG_FILE = Path(__file__).parent / "data" / "simulated_rig.toml"
-BALANCE_ROUTES = ("serial_daq", "can")
+BALANCE_ROUTES = ("serial_daq", "can", "netft")
+NOT_YET_ROUTES = {
+    "netft": "ATI Net F/T (UDP RDT): its driver and simulator exist, as a rig's balance not yet",
+}
+"""Routes the rig file names but the rig cannot use yet; refused with one line saying "not yet"."""
 MIN_BAUD = 1200
 """Slowest serial line rate accepted, bit/s."""
 MAX_BAUD = 12_000_000
@@ -31,8 +35,9 @@ MAX_BAUD = 12_000_000
 
 _ALLOWED_KEYS = {
     "rig": {"name", "simulated", "time_scale", "seed", "simulator_control"},
-    "balance": {"route", "calibration", "tool_transform_mm_deg", "serial_daq", "can"},
+    "balance": {"route", "calibration", "tool_transform_mm_deg", "serial_daq", "can", "aux_daq"},
     "balance.serial_daq": {"port", "baud", "sample_rate_hz"},
+    "balance.aux_daq": {"port", "baud", "sample_rate_hz"},
     "balance.can": {"interface", "channel", "bit_rate", "base_id", "sample_rate_hz"},
     "tunnel": {"table"},
     "fan": {"port", "baud", "backend"},
@@ -110,6 +115,31 @@ class RigDescription:
     limits: SafetyLimits
     simulator_control: Path | None = None
     """Control socket of simulated instruments served by another process (``rig_simulator_server``), or None."""
+    aux_daq: SerialDaqSettings | None = None
+    """``[balance.aux_daq]``: the ORNI-DAQ9 board as auxiliary acquisition beside a CAN balance, or None."""
+
+    @property
+    def carries_flap_channels(self) -> bool:
+        """True when the balance stream holds the Hall line, hot-wire and thermocouple (what a sweep records):
+        the ORNI-DAQ9 balance, or a CAN balance with ``[balance.aux_daq]``."""
+        return self.balance_route == "serial_daq" or self.aux_daq is not None
+
+    def balance_sample_rate_hz(self) -> float:
+        """The rate of the balance stream's rows the rig file sets, samples/s: the ORNI-DAQ9's, the auxiliary
+        board's beside a CAN balance (rows on its grid, the balance polled at ``[balance.can]``'s rate), or the
+        CAN polling rate alone."""
+        if self.balance_route == "serial_daq":
+            return self.serial_daq.sample_rate_hz
+        return self.can.sample_rate_hz if self.aux_daq is None else self.aux_daq.sample_rate_hz
+
+    def balance_sample_rate_ceiling_hz(self) -> float:
+        """The highest row rate of the balance stream: the serial line's frames/s of the board that carries the
+        Hall line, or the CAN polling ceiling for a CAN balance alone."""
+        if self.balance_route == "serial_daq":
+            return link_ceiling_frames_per_s(self.serial_daq.baud)
+        if self.aux_daq is not None:
+            return link_ceiling_frames_per_s(self.aux_daq.baud)
+        return gauge_sample_rate_ceiling_hz(self.can.bit_rate, worst_case_stuffing=False)
 
 
 def _fields(path: Path, section: str, table: Any) -> TomlTable:
@@ -159,6 +189,32 @@ def _actuator(
     )
 
 
+def _aux_daq(
+    path: Path, balance: TomlTable, route: str, simulated: bool
+) -> SerialDaqSettings | None:
+    """``[balance.aux_daq]``: the serial board beside a CAN balance (None when absent)."""
+    if "aux_daq" not in balance.table:
+        return None
+    if route != "can":
+        raise UserInputError(
+            f"{path}: [balance.aux_daq]",
+            f"only beside a CAN balance; route {route!r} carries the Hall line, hot-wire and thermocouple itself",
+        )
+    aux = _fields(path, "balance.aux_daq", balance.table["aux_daq"])
+    settings = SerialDaqSettings(
+        port=aux.text("port", "simulated" if simulated else REQUIRED),
+        baud=aux.integer("baud", DEFAULT_BAUD, minimum=MIN_BAUD, maximum=MAX_BAUD),
+        sample_rate_hz=aux.number("sample_rate_hz", 10_000.0, positive=True),
+    )
+    if settings.sample_rate_hz > link_ceiling_frames_per_s(settings.baud):
+        raise UserInputError(
+            aux.where("sample_rate_hz"),
+            f"{settings.sample_rate_hz:g} Hz exceeds the serial link ceiling "
+            f"{link_ceiling_frames_per_s(settings.baud):g} Hz at {settings.baud} baud",
+        )
+    return settings
+
+
 def read_rig_file(path: str | Path) -> RigDescription:
     """Read and check a rig file; see ``docs/rig-file.md``."""
     path = Path(path)
@@ -175,6 +231,10 @@ def read_rig_file(path: str | Path) -> RigDescription:
     rig = _fields(path, "rig", document["rig"])
     balance = _fields(path, "balance", document["balance"])
     route = balance.text("route", choices=BALANCE_ROUTES)
+    if route in NOT_YET_ROUTES:
+        raise UserInputError(
+            balance.where("route"), f"{route!r}: not yet ({NOT_YET_ROUTES[route]})"
+        )
     simulated = rig.boolean("simulated", False)
     simulator_control = None
     if "simulator_control" in rig.table:
@@ -212,6 +272,7 @@ def read_rig_file(path: str | Path) -> RigDescription:
             f"{can_settings.sample_rate_hz:g} samples/s exceeds the CAN ceiling {can_ceiling:.0f} "
             f"samples/s at {can_settings.bit_rate} bit/s",
         )
+    aux_daq = _aux_daq(path, balance, route, simulated)
     tunnel = _fields(path, "tunnel", document["tunnel"])
     fan, fan_settings = _actuator(path, "fan", document["fan"], simulated)
     strut, strut_settings = _actuator(path, "strut", document["strut"], simulated)
@@ -255,4 +316,5 @@ def read_rig_file(path: str | Path) -> RigDescription:
             max_motor_rpm=limits.number("max_motor_rpm", positive=True),
         ),
         simulator_control=simulator_control,
+        aux_daq=aux_daq,
     )

@@ -29,7 +29,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import serial
 
+from ornitail.acquisition.balance_interface import BalanceStream, LinkCounts
 from ornitail.acquisition.daq_protocol import (
+    ANALOG_CHANNEL_COUNT,
+    CHANNEL_NAMES,
     DEFAULT_BAUD,
     MINIMUM_SAMPLE_RATE_HZ,
     STOP_MARKER,
@@ -68,10 +71,11 @@ OPEN_DRAIN_LIMIT_S = 10.0
 class DaqBlock:
     """One block of consecutive samples as parsed from the stream.
 
-    counters : (n,) uint32 board sample counters. volts : (n, 9) float64 in
-    ``daq_protocol.CHANNEL_NAMES`` order, V (Hall: 0 V or the logic-high V). host_time_s :
-    ``time.monotonic()`` when the block was parsed (arrival, not sampling, time). saturated : (n,) bool,
-    the board's over-range status bit or an analog channel at -32768 / +32767 counts (None: not known).
+    counters : (n,) uint32 board sample counters. volts : (n, 9) float64 in ``daq_protocol.CHANNEL_NAMES``
+    order, V (Hall: 0 V or the logic-high V). host_time_s : the driver's ``clock()`` (default
+    ``time.monotonic()``) when the read that completed its last frame returned (arrival, not sampling, time).
+    saturated : (n,) bool, the board's over-range status bit or an analog channel at -32768 / +32767 counts
+    (None: not known).
     """
 
     counters: np.ndarray
@@ -80,8 +84,9 @@ class DaqBlock:
     saturated: np.ndarray | None = field(default=None)
 
 
-class SerialDaqDriver:
-    """Streams the nine synchronised channels of an ORNI-DAQ9 board.
+class SerialDaqDriver(BalanceStream):
+    """Streams the nine synchronised channels of an ORNI-DAQ9 board (a :class:`BalanceStream` of its own, or the
+    auxiliary acquisition beside another balance, see :mod:`aligned_balance`).
 
     Parameters
     ----------
@@ -96,6 +101,8 @@ class SerialDaqDriver:
         Capacity of the block queue used when no ``block_callback`` is given.
     reply_timeout_s : float
         How long to wait for a command reply before declaring the board disconnected, s.
+    clock : callable returning s
+        Stamps each block's ``host_time_s`` (default ``time.monotonic``; the rig passes its rig time).
 
     Attributes
     ----------
@@ -118,20 +125,23 @@ class SerialDaqDriver:
         error_callback: Callable[[Exception], None] | None = None,
         queue_blocks: int = 2000,
         reply_timeout_s: float = 1.0,
+        clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.port = port
+        self._clock = clock
         self.baud = int(baud)
         self.name = name
         self._block_callback = block_callback
         self._error_callback = error_callback
         self.blocks: queue.Queue[DaqBlock | None] = queue.Queue(maxsize=queue_blocks)
-        self.blocks_dropped = 0
+        self._blocks_dropped = 0
         self._reply_timeout_s = reply_timeout_s
         self._serial: serial.Serial | None = None
         self._port_lock: ExclusiveLock | None = None
         self.stale_bytes_discarded = 0
         self._parser = DaqFrameParser()
         self._reader: threading.Thread | None = None
+        self._last_bytes_s = 0.0
         self._stop_requested = threading.Event()
         self._failure: Exception | None = None
         self.identity: DaqIdentity | None = None
@@ -354,7 +364,7 @@ class SerialDaqDriver:
         try:
             self.blocks.put_nowait(decoded_block)
         except queue.Full:
-            self.blocks_dropped += 1
+            self._blocks_dropped += 1
 
     def _read_loop(self) -> None:
         port = self._port()
@@ -367,7 +377,10 @@ class SerialDaqDriver:
         try:
             while True:
                 self.reader_cpu_s = time.thread_time() - cpu_start_s
-                pending += port.read(port.in_waiting or 1)
+                chunk = port.read(port.in_waiting or 1)
+                if chunk:
+                    self._last_bytes_s = self._clock()  # the newest complete frame arrived by then
+                    pending += chunk
                 if self._stop_requested.is_set():
                     stop_deadline = stop_deadline or time.monotonic() + 1.0
                     marker_at = pending.find(STOP_MARKER)
@@ -399,7 +412,55 @@ class SerialDaqDriver:
                 DaqBlock(
                     decoded.counters,
                     counts_to_volts(decoded, identity),
-                    time.monotonic(),
+                    self._last_bytes_s,
                     saturated_rows(decoded),
                 )
             )
+
+    # -- BalanceStream ----------------------------------------------------------------------
+    @property
+    def blocks_dropped(self) -> int:
+        """Blocks discarded because the queue was full."""
+        return self._blocks_dropped
+
+    @blocks_dropped.setter
+    def blocks_dropped(self, value: int) -> None:
+        self._blocks_dropped = int(value)
+
+    @property
+    def channel_names(self) -> tuple[str, ...]:
+        """The board's nine channels (``daq_protocol.CHANNEL_NAMES``)."""
+        return tuple(CHANNEL_NAMES)
+
+    def start_stream(self, sample_rate_hz: float) -> float:
+        """Set the board's rate (``RATE``), start streaming; the rate the board confirmed, Hz."""
+        self.set_sample_rate(sample_rate_hz)
+        self.start()
+        assert self.sample_rate_hz is not None
+        return self.sample_rate_hz
+
+    def stop_stream(self) -> None:
+        """``STOP`` and end the reader thread."""
+        self.stop()
+
+    def read_block(self, timeout_s: float) -> DaqBlock | None:
+        """:meth:`get_block`."""
+        return self.get_block(timeout_s=timeout_s)
+
+    def link_counts(self) -> LinkCounts:
+        """CRC failures, lost samples, garbage bytes and resyncs of the parser."""
+        statistics = self.statistics
+        return LinkCounts(
+            crc_failures=statistics.crc_failures,
+            lost_samples=statistics.lost_samples,
+            garbage_bytes=statistics.garbage_bytes,
+            resyncs=statistics.resyncs,
+        )
+
+    def adc_limits_v(self) -> tuple[np.ndarray, np.ndarray]:
+        """-32768 and +32767 counts of each analog channel in volts (the identity's volts per count)."""
+        identity = self.identity
+        if identity is None:
+            raise RuntimeError(f"{self.name}: open() before adc_limits_v()")
+        volts_per_count = np.asarray(identity.volts_per_count, dtype=float)[:ANALOG_CHANNEL_COUNT]
+        return -32768 * volts_per_count, 32767 * volts_per_count

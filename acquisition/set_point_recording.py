@@ -164,6 +164,7 @@ def record_set_point(
             "samples_missing_in_record": missing,
             **conditions.journal_values(),
             **context.motor_log.journal_values(stream),
+            **stream.alignment_values(),
         },
     )
     recorder.complete_set_point(record)

@@ -12,6 +12,10 @@ from typing import Any
 
 import numpy as np
 
+HISTORY_S = 2.0
+"""Simulated seconds of samples kept for instruments that sample by time
+(:meth:`SharedTunnelSignals.samples_at_times`)."""
+
 
 class SharedTunnelSignals:
     """Thread-safe access to a tunnel signal source producing (n, 9) volts at ``sample_rate_hz``.
@@ -31,6 +35,10 @@ class SharedTunnelSignals:
         self._resampling_phase = 0.0
         self._consumed_samples = 0
         self._last_sample = np.zeros(9)
+        self._history: np.ndarray | None = (
+            None  # ring: source sample i in row i % len, made when first needed
+        )
+        self._history_from = 0  # the first source sample the ring was given
 
     @classmethod
     def from_simulator(
@@ -115,18 +123,47 @@ class SharedTunnelSignals:
             return block
 
     def sample_at(self, simulated_time_s: float, chunk_samples: int = 20_000) -> np.ndarray:
-        """Advance the source to ``simulated_time_s`` and return its latest (9,) sample, V.
+        """Advance the source to ``simulated_time_s`` and return its (9,) sample at that time, V (the source
+        sample before ``simulated_time_s * sample_rate_hz``, the first at time 0).
 
         Used by polled instruments (NETCANOEM) that read one sample per request.
         """
+        return self.samples_at_times(np.array([simulated_time_s]), chunk_samples)[0]
+
+    def samples_at_times(
+        self, simulated_times_s: np.ndarray, chunk_samples: int = 20_000
+    ) -> np.ndarray:
+        """(n, 9) samples at increasing simulated times, V, each as :meth:`sample_at` takes it: instruments with
+        their own sample clocks (an auxiliary board whose crystal runs off nominal) share one source with a polled
+        balance. The source is advanced to the latest time; the last ``HISTORY_S`` stay available to the others.
+        """
+        times = np.asarray(simulated_times_s, dtype=float)
+        indices = np.maximum((times * self.sample_rate_hz).astype(np.int64), 1) - 1
         with self._lock:
-            due = int(simulated_time_s * self.sample_rate_hz) - self._consumed_samples
-            if self._consumed_samples == 0:
-                due = max(due, 1)
+            due = int(indices[-1]) + 1 - self._consumed_samples
             while due > 0:
                 count = min(due, chunk_samples)
                 block = np.asarray(self._source.next_block(count), dtype=float)
                 self._last_sample = block[-1].copy()
+                self._remember(block)
                 self._consumed_samples += count
                 due -= count
-            return self._last_sample.copy()
+            assert self._history is not None
+            size = len(self._history)
+            oldest = max(0, self._consumed_samples - size)
+            if self._history_from > oldest:
+                oldest = self._history_from
+            rows = np.clip(indices, oldest, self._consumed_samples - 1) % size
+            return self._history[rows].copy()
+
+    def _remember(self, block: np.ndarray) -> None:
+        """Keep the newest ``HISTORY_S`` of generated samples in the ring (called with the lock held)."""
+        if self._history is None:
+            self._history = np.zeros((max(int(HISTORY_S * self.sample_rate_hz), 1), 9))
+            self._history_from = self._consumed_samples
+        size = len(self._history)
+        first = self._consumed_samples + max(
+            0, len(block) - size
+        )  # source index of the first row kept
+        block = block[-size:]
+        self._history[(np.arange(len(block)) + first) % size] = block

@@ -226,6 +226,15 @@ class SimulatedDaqBoard(SimulatedDevice):
         else:
             self._reply(f"ERR unknown command {command!r}")
 
+    def _samples_due(self, elapsed_s: float) -> int:
+        """Samples the board's clock has taken ``elapsed_s`` simulated seconds after START."""
+        return int(elapsed_s * self.sample_rate_hz)
+
+    def _sample_signals(self, count: int) -> np.ndarray:
+        """The next ``count`` samples of the nine signals, V (the stream's samples ``_samples_due_before - count``
+        onwards)."""
+        return self.signals.next_block_at_rate(count, self.sample_rate_hz)
+
     def _set_rate(self, text: str) -> None:
         try:
             rate = float(text)
@@ -243,11 +252,11 @@ class SimulatedDaqBoard(SimulatedDevice):
 
     def _write_due_frames(self) -> None:
         elapsed_s = self.clock.now_s() - self._stream_start_s
-        due = int(elapsed_s * self.sample_rate_hz) - self._samples_due_before
+        due = self._samples_due(elapsed_s) - self._samples_due_before
         if due <= 0:
             return
         self._samples_due_before += due
-        volts = self.signals.next_block_at_rate(due, self.sample_rate_hz)
+        volts = self._sample_signals(due)
         scaled = np.rint(volts[:, :8] / VOLTS_PER_COUNT)
         counts = np.clip(scaled, -32768, 32767).astype(np.int16)
         status = np.where(volts[:, 8] > HALL_THRESHOLD_V, STATUS_BIT_HALL, 0).astype(np.uint8)

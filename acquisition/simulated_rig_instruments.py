@@ -22,6 +22,7 @@ from ornitail.acquisition.simulated_actuators import (
     SimulatedStrutActuator,
     SimulatedTunnelFan,
 )
+from ornitail.acquisition.simulated_aux_daq_board import SimulatedAuxDaqBoard
 from ornitail.acquisition.simulated_clock import SimulatedClock
 from ornitail.acquisition.simulated_daq_board import SimulatedDaqBoard
 from ornitail.acquisition.simulated_device import SimulatedDevice
@@ -48,6 +49,8 @@ class SimulatedRigInstruments:
     daq_board: SimulatedDaqBoard | None
     netcanoem_board: SimulatedNetCanOemBoard | None
     can_channel: str | None
+    aux_daq_board: SimulatedAuxDaqBoard | None = None
+    """The ORNI-DAQ9 beside the CAN balance (``[balance.aux_daq]``), on a clock of its own, else None."""
 
     @classmethod
     def start(
@@ -72,7 +75,7 @@ class SimulatedRigInstruments:
                 motor = SimulatedFlappingMotor(clock, signals, gear_ratio=description.gear_ratio)
             started.append(motor)
             started = [simulator.start() for simulator in started if simulator is not None]
-            daq_board = netcanoem_board = can_channel = None
+            daq_board = netcanoem_board = can_channel = aux_daq_board = None
             if description.balance_route == "serial_daq":
                 daq_board = SimulatedDaqBoard(
                     signals,
@@ -92,12 +95,30 @@ class SimulatedRigInstruments:
                     serial_number=calibration.serial[:8],
                 ).start()
                 started.append(netcanoem_board)
+                if description.aux_daq is not None:
+                    aux_daq_board = SimulatedAuxDaqBoard(
+                        signals,
+                        clock,
+                        sample_rate_hz=description.aux_daq.sample_rate_hz,
+                        baud=description.aux_daq.baud,
+                    ).start()
+                    started.append(aux_daq_board)
         except BaseException:
             for simulator in reversed(started):
                 if simulator is not None:
                     simulator.close()
             raise
-        return cls(clock, signals, fan, strut, motor, daq_board, netcanoem_board, can_channel)
+        return cls(
+            clock,
+            signals,
+            fan,
+            strut,
+            motor,
+            daq_board,
+            netcanoem_board,
+            can_channel,
+            aux_daq_board,
+        )
 
     def actuator_ports(self) -> dict[str, str]:
         """The pty of each actuator that has a simulator, by role (``{"fan": "/dev/pts/5", ...}``)."""
@@ -106,7 +127,8 @@ class SimulatedRigInstruments:
 
     def close(self) -> None:
         """Stop every simulator."""
-        for simulator in (self.daq_board, self.netcanoem_board, self.motor, self.strut, self.fan):
+        simulators = (self.aux_daq_board, self.daq_board, self.netcanoem_board)
+        for simulator in (*simulators, self.motor, self.strut, self.fan):
             if simulator is not None:
                 simulator.close()
 

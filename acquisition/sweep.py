@@ -37,7 +37,6 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from ornitail.acquisition.catalog import RunCatalog, RunFilter
-from ornitail.acquisition.daq_protocol import link_ceiling_frames_per_s
 from ornitail.acquisition.exclusive_locks import ExclusiveLock, LockHeld
 from ornitail.acquisition.instrument_errors import InstrumentError
 from ornitail.acquisition.live_balance import LiveBalance, balance_stream_layout
@@ -173,9 +172,7 @@ def check_plan_against_rig(plan: SweepPlan, rig: Rig) -> None:
         description.limits.max_motor_rpm,
         description.limits.flapping_frequency_max_hz,
     )
-    rate_problem = sample_rate_violation(
-        plan, link_ceiling_frames_per_s(description.serial_daq.baud)
-    )
+    rate_problem = sample_rate_violation(plan, description.balance_sample_rate_ceiling_hz())
     problems = [rate_problem] if rate_problem is not None else []
     if violations:
         problems.insert(
@@ -187,11 +184,11 @@ def check_plan_against_rig(plan: SweepPlan, rig: Rig) -> None:
         problems[0] += f" ({description.path})"
     if problems:
         raise UserInputError(plan.source, "; ".join(problems))
-    if rig.description.balance_route != "serial_daq":
+    if not rig.description.carries_flap_channels:
         raise UserInputError(
             f"{rig.description.path}: [balance].route",
-            "sweeps record the Hall line and the hot-wire with the balance, which only the serial DAQ "
-            'route carries; use route = "serial_daq"',
+            'sweeps record the Hall line and the hot-wire with the balance; use route = "serial_daq", or add '
+            "the serial board beside the CAN balance as [balance.aux_daq]",
         )
 
 

@@ -1,0 +1,145 @@
+"""A device's sample counter mapped to host time: a straight line under the arrival times (the lower envelope).
+
+A device with its own sample clock (the ORNI-DAQ9 board beside another balance) stamps nothing; the host knows
+only when each block arrived. Arrival = sampling time + transport latency, and the latency is never negative, so
+the sampling times lie on a line (the device's crystal: an offset and a rate a few tens of ppm off nominal) *at or
+below* every arrival. :class:`CounterClockModel` fits that line: the slope through the per-bin minima of the
+arrival times (bins of ``BIN_S`` of samples, where the fastest deliveries sit; the median of the slopes between
+every two bins, so that bins whose deliveries all stalled do not tilt it), the offset so that the line
+touches the lowest arrival of the newest ``OFFSET_WINDOW_S``. What remains is the transport's fastest delivery
+(its floor), which timestamps cannot see; the spread of the lowest arrivals above the line
+(:attr:`ClockFit.envelope_s`) says how sharply the line is known. Times are in the host clock's seconds (rig time
+on a simulated rig); counters are unwrapped (int64).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+WINDOW_S = 60.0
+"""Arrivals older than this (in samples of the device) are forgotten: the crystal's rate drifts with temperature."""
+BIN_S = 0.25
+"""Span of samples per bin whose earliest arrival is one point of the slope fit, s."""
+MIN_BINS_FOR_SLOPE = 40
+"""Below this many bins (10 s) the nominal rate is used: with bin minima scattered by ~1 ms, a slope from a shorter
+span is less exact than the crystal (50-100 ppm)."""
+OFFSET_WINDOW_S = 5.0
+"""The line is laid under the arrivals of the newest this many seconds (rows are taken near the newest samples),
+so an error of the rate moves it by at most rate error x this span (100 ppm: 0.5 ms)."""
+MAX_RATE_ERROR_PPM = 1000.0
+"""A fitted rate further off nominal than this is not a crystal's (stalled deliveries fooled the fit): the nominal
+rate is used instead."""
+ENVELOPE_QUANTILE = 0.05
+"""The envelope's sharpness is the residual this fraction of arrivals lies within."""
+
+
+@dataclass(frozen=True)
+class ClockFit:
+    """The fitted line ``time = offset_s + (counter - reference) * period_s`` and how well arrivals follow it.
+
+    jitter_rms_s, jitter_max_s : arrival residuals above the line (transport latency beyond its floor), s.
+    envelope_s : the ``ENVELOPE_QUANTILE`` quantile of those residuals, s: the line's own uncertainty.
+    """
+
+    reference: int
+    offset_s: float
+    period_s: float
+    nominal_period_s: float
+    points: int
+    jitter_rms_s: float
+    jitter_max_s: float
+    envelope_s: float
+
+    @property
+    def rate_error_ppm(self) -> float:
+        """How much faster than nominal the device's clock runs, ppm."""
+        return (self.nominal_period_s / self.period_s - 1.0) * 1e6
+
+    def time_of(self, counters: np.ndarray | float) -> np.ndarray:
+        """Host time at which the device took the samples ``counters`` (unwrapped), s."""
+        return self.offset_s + (np.asarray(counters, dtype=float) - self.reference) * self.period_s
+
+    def counter_at(self, times_s: np.ndarray | float) -> np.ndarray:
+        """Fractional counter the device was at at host times ``times_s``."""
+        return self.reference + (np.asarray(times_s, dtype=float) - self.offset_s) / self.period_s
+
+
+class CounterClockModel:
+    """Arrivals of one device's blocks, and the line under them.
+
+    Parameters
+    ----------
+    nominal_rate_hz : float
+        The device's nominal sample rate, samples per host-clock second.
+    """
+
+    def __init__(self, nominal_rate_hz: float) -> None:
+        self.nominal_period_s = 1.0 / float(nominal_rate_hz)
+        self._counters = np.empty(0, dtype=np.int64)
+        self._arrivals = np.empty(0, dtype=float)
+        self._fit: ClockFit | None = None
+
+    def add(self, last_counter: int, arrival_s: float) -> None:
+        """One block arrived at ``arrival_s``; ``last_counter`` is its last (newest) sample's unwrapped counter."""
+        self._counters = np.append(self._counters, np.int64(last_counter))
+        self._arrivals = np.append(self._arrivals, float(arrival_s))
+        window = int(WINDOW_S / self.nominal_period_s)
+        keep = self._counters >= self._counters[-1] - window
+        if not keep.all():
+            self._counters, self._arrivals = self._counters[keep], self._arrivals[keep]
+        self._fit = None
+
+    @property
+    def points(self) -> int:
+        """Arrivals in the window."""
+        return len(self._counters)
+
+    def fit(self) -> ClockFit | None:
+        """The line under the arrivals in the window (None before the first arrival)."""
+        if self._fit is None and len(self._counters):
+            self._fit = self._fitted()
+        return self._fit
+
+    def _fitted(self) -> ClockFit:
+        reference = int(self._counters[0])
+        x = (self._counters - reference).astype(float)
+        # residuals against the nominal line; the slope correction is fitted through per-bin minima
+        residual = self._arrivals - x * self.nominal_period_s
+        bins = np.floor(x / (BIN_S / self.nominal_period_s)).astype(np.int64)
+        edges = np.flatnonzero(np.diff(bins)) + 1
+        starts = np.concatenate(([0], edges))
+        slope = 0.0
+        if len(starts) >= MIN_BINS_FOR_SLOPE:
+            lowest = np.array(
+                [
+                    start + int(np.argmin(part))
+                    for start, part in zip(starts, np.split(residual, edges), strict=True)
+                ]
+            )
+            slope = _median_slope(x[lowest], residual[lowest])
+            if abs(slope / self.nominal_period_s) > MAX_RATE_ERROR_PPM * 1e-6:
+                slope = 0.0
+        above = residual - slope * x
+        recent = x >= x[-1] - OFFSET_WINDOW_S / self.nominal_period_s
+        offset = float(above[recent].min())
+        latency = (above - offset)[recent]
+        return ClockFit(
+            reference=reference,
+            offset_s=offset,
+            period_s=self.nominal_period_s + slope,
+            nominal_period_s=self.nominal_period_s,
+            points=int(np.count_nonzero(recent)),
+            jitter_rms_s=float(np.sqrt(np.mean(latency**2))),
+            jitter_max_s=float(latency.max()),
+            envelope_s=float(np.quantile(latency, ENVELOPE_QUANTILE)),
+        )
+
+
+def _median_slope(x: np.ndarray, y: np.ndarray) -> float:
+    """Theil-Sen slope: the median of the slopes between every two points (robust to up to ~29 % outliers)."""
+    first, second = np.triu_indices(len(x), k=1)
+    run = x[second] - x[first]
+    valid = run > 0
+    return float(np.median((y[second] - y[first])[valid] / run[valid]))

@@ -1,0 +1,116 @@
+"""The one interface the rig and the live stream use for a balance, whatever device and transport carry it.
+
+Like python-can's ``BusABC`` (and :mod:`actuator_interfaces` for the actuators): :class:`Rig` and
+:class:`LiveBalance` know only :class:`BalanceStream`; a backend (the ORNI-DAQ9 serial board, the ATI NETCANOEM on
+CAN, or either of the CAN balance with the serial board as an auxiliary acquisition, see :mod:`balance_backends`)
+implements it. Blocks are in volts in ``daq_protocol.CHANNEL_NAMES`` order (six gauges, hot-wire bridge,
+thermocouple, Hall line) with one sample counter per row, so recordings look the same whichever backend made them.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+
+@dataclass
+class BalanceBlock:
+    """Consecutive rows of a balance stream.
+
+    counters : (n,) unsigned sample counters (consecutive unless samples were lost).
+    volts : (n, channels) float64, V, in the backend's :attr:`BalanceStream.channel_names` order.
+    host_time_s : when the block reached the host (arrival, not sampling, time), in the backend's clock, s.
+    saturated : (n,) bool, a channel at its ADC limit or the device's over-range status (None: not known).
+    """
+
+    counters: np.ndarray
+    volts: np.ndarray
+    host_time_s: float
+    saturated: np.ndarray | None = field(default=None)
+
+
+@dataclass(frozen=True)
+class LinkCounts:
+    """Running totals of a stream's link health since it was opened: CRC failures, samples lost (counter gaps),
+    bytes outside valid frames and the stretches of them (resyncs), frames of another node with the device's ids."""
+
+    crc_failures: int = 0
+    lost_samples: int = 0
+    garbage_bytes: int = 0
+    resyncs: int = 0
+    foreign_frames: int = 0
+
+
+class BalanceStream(ABC):
+    """A balance (possibly with an auxiliary acquisition) that streams blocks of samples.
+
+    Life cycle: ``open()`` (exclusive, identified, not streaming), ``start_stream(rate)``, ``read_block()`` until
+    ``stop_stream()``, ``close()``. The safe state of a balance is "not streaming" (:meth:`safe_state`).
+    """
+
+    name: str
+    """Instrument name used in messages ("acquisition board", "NETCANOEM balance")."""
+
+    @property
+    @abstractmethod
+    def channel_names(self) -> tuple[str, ...]:
+        """Names of the columns of :attr:`BalanceBlock.volts`."""
+
+    @property
+    def carries_flap_channels(self) -> bool:
+        """True when the blocks hold the hot-wire, thermocouple and Hall line with the gauges (a sweep needs them)."""
+        return {"hotwire_bridge_v", "thermocouple_v", "hall_v"} <= set(self.channel_names)
+
+    @abstractmethod
+    def open(self) -> Any:
+        """Open the port or bus exclusively, bring the device to a known state, identify it (returned)."""
+
+    @abstractmethod
+    def close(self) -> None:
+        """Stop streaming if needed and close; safe to call twice or after a failure."""
+
+    @abstractmethod
+    def start_stream(self, sample_rate_hz: float) -> float:
+        """Start streaming at ``sample_rate_hz`` (samples per rig second); return the rate the device runs at."""
+
+    @abstractmethod
+    def stop_stream(self) -> None:
+        """Stop streaming; raises the reader's error if it ended with one."""
+
+    @abstractmethod
+    def read_block(self, timeout_s: float) -> BalanceBlock | None:
+        """The next block, or None after ``timeout_s``; raises the stream's error (e.g. ``InstrumentDisconnected``)."""
+
+    @abstractmethod
+    def raise_if_failed(self) -> None:
+        """Raise the stream's error, if it ended with one."""
+
+    @abstractmethod
+    def link_counts(self) -> LinkCounts:
+        """Link health since the stream was opened."""
+
+    @property
+    @abstractmethod
+    def blocks_dropped(self) -> int:
+        """Blocks the driver discarded because its consumer did not keep up."""
+
+    @abstractmethod
+    def adc_limits_v(self) -> tuple[np.ndarray, np.ndarray]:
+        """(low, high) volts of the analog channels' ADC ranges (the first 8 of ``CHANNEL_NAMES``), V; a value at
+        or beyond them is clipped. Valid once open."""
+
+    def safe_state(self) -> None:
+        """Not streaming (a balance moves nothing): stop the stream if it runs."""
+        self.stop_stream()
+
+    def alignment_values(self) -> dict[str, float | int]:
+        """How well the devices of the stream are aligned in time, for a set point's journal entry (empty for a
+        single device, whose channels share one sample clock)."""
+        return {}
+
+    def recording_description(self) -> dict[str, Any]:
+        """What a recording stores about this stream beyond the rig file's route (empty: nothing more)."""
+        return {}
