@@ -378,6 +378,11 @@ class Rig:
             "tunnel_table": self.description.tunnel_table_path,
         }
 
+    @property
+    def time_scale(self) -> float:
+        """Rig seconds per wall second: the simulated rig's time scale, 1 for a real rig."""
+        return self._time_scale
+
     def now_s(self) -> float:
         """Rig time, s: the simulated clock of a simulated rig, else the monotonic wall clock."""
         if self.simulators is not None:

@@ -327,7 +327,7 @@ class RigSession:
 
     def _measure(self, rig: Rig, record_s: float):
         assert self.live is not None
-        scale = rig.description.time_scale if rig.description.simulated else 1.0
+        scale = rig.time_scale
         return self.live.measure(record_s, timeout_s=record_s / scale + 10.0)
 
     def _tare(self, record_s: float) -> None:

@@ -57,7 +57,7 @@ class SweepPanel(QtWidgets.QGroupBox):
         self.progress.setRange(0, event.total)
         self.progress.setValue(event.completed)
         rig = self.session.rig
-        scale = rig.description.time_scale if rig is not None and rig.description.simulated else 1.0
+        scale = rig.time_scale if rig is not None else 1.0
         self.eta.setText(f"ETA {format_eta(event.eta_s, scale)} (m:ss)")
         if event.set_point is not None:
             self.current.setText(f"{event.stage}: {event.set_point.label}")
