@@ -159,6 +159,21 @@ def _steady_state_summary(table: pd.DataFrame) -> dict[str, Any]:
 
 def _render(result: dict[str, Any]) -> str:
     lines = [f"sweep {result['sweep']['status']}: {result['sweep']['message']}"]
+    health = result["sweep"]["link_health"]
+    lost = sum(run["samples_lost"] for run in health)
+    retaken = sum(run["set_points_retaken"] for run in health)
+    if (
+        lost or retaken
+    ):  # the link lost samples (a busy machine): say where, and that no record kept a gap
+        whole = (
+            "every kept record is whole"
+            if result["sweep"]["status"] == "completed"
+            else "see above"
+        )
+        lines.append(
+            f"  link: {lost} samples lost over {len(health)} runs; {retaken} set point(s) recorded again "
+            f"after losing samples inside their record ({whole})"
+        )
     steady = result.get("steady_state", {})
     if steady:
         lines.append("")
