@@ -13,7 +13,7 @@ def write_gap_example(tmp_path_factory):
     """``write(kind, effect)`` runs ``ornitail gap example --kind KIND --effect EFFECT --out DIR --json`` in a new
     folder and returns its JSON record (paths of the data and the baseline model)."""
 
-    def write(kind: str, effect: str) -> dict:
+    def write(kind: str, effect: str, *options: str) -> dict:
         folder = tmp_path_factory.mktemp(kind)
         arguments = [
             "gap",
@@ -25,6 +25,7 @@ def write_gap_example(tmp_path_factory):
             "--out",
             str(folder),
             "--json",
+            *options,
         ]
         result = CliRunner().invoke(main, arguments)
         assert result.exit_code == 0, result.output

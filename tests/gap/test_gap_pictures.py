@@ -11,7 +11,8 @@ from ornitail.gap.plots import flight_overlay_figure, localisation_figure, ranki
 
 @pytest.fixture(scope="module")
 def flight_report(write_gap_example, tmp_path_factory):
-    example = write_gap_example("flight", "added_mass")
+    # 8 manoeuvres: enough for the nested split (6 at least) and every picture, half the diagnosis time
+    example = write_gap_example("flight", "added_mass", "--manoeuvres", "8")
     out = tmp_path_factory.mktemp("flight-report")
     arguments = ["gap", "diagnose", "--model", example["model"], "--data", example["data"]]
     result = CliRunner().invoke(main, [*arguments, "--out", str(out), "--json"])
