@@ -11,12 +11,14 @@ driver from an :class:`ActuatorContext` (port, baud, its checked settings, the r
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, Self
 
 from ornitail.acquisition.line_instrument_connection import DEFAULT_LINE_BAUD
+from ornitail.core.errors import UserInputError, require_finite
 
 if TYPE_CHECKING:
     from ornitail.acquisition.rig_file import SafetyLimits
@@ -123,6 +125,18 @@ class Actuator(ABC):
     def identity_problem(self, identity: str, rig_file_key: str) -> str | None:
         """Why ``identity`` (what :meth:`open` returned) is not the instrument this driver speaks to, or None."""
         return None
+
+
+def require_pitch_within(name: str, pitch_rad: float, low_rad: float, high_rad: float) -> None:
+    """Refuse a pitch (rad) that is not finite or lies outside the rig's limits, before anything is sent to the
+    strut called ``name``; the message shows degrees."""
+    require_finite("pitch_rad", pitch_rad)
+    if not low_rad <= pitch_rad <= high_rad:
+        raise UserInputError(
+            "pitch",
+            f"{math.degrees(pitch_rad):g} deg is outside the rig limit "
+            f"{math.degrees(low_rad):g}..{math.degrees(high_rad):g} deg ({name})",
+        )
 
 
 class ConnectedOverOnePort:

@@ -9,10 +9,10 @@ import math
 import time
 from dataclasses import dataclass
 
+from ornitail.acquisition.actuator_interfaces import require_pitch_within
 from ornitail.acquisition.instrument_errors import InstrumentReplyError
 from ornitail.acquisition.line_instrument_connection import DEFAULT_LINE_BAUD
 from ornitail.acquisition.line_instrument_driver import LineInstrumentDriver
-from ornitail.core.errors import UserInputError, require_finite
 
 
 @dataclass
@@ -68,14 +68,7 @@ class StrutPitchDriver(LineInstrumentDriver):
 
     def set_pitch(self, pitch_rad: float) -> None:
         """Command pitch ``pitch_rad`` (rad); refused outside the rig's limits before sending."""
-        require_finite("pitch_rad", pitch_rad)
-        if not self.pitch_min_rad <= pitch_rad <= self.pitch_max_rad:
-            raise UserInputError(
-                "pitch",
-                f"{math.degrees(pitch_rad):g} deg is outside the rig limit "
-                f"{math.degrees(self.pitch_min_rad):g}..{math.degrees(self.pitch_max_rad):g} deg "
-                f"({self.name})",
-            )
+        require_pitch_within(self.name, pitch_rad, self.pitch_min_rad, self.pitch_max_rad)
         self.connection.command(f"ANGLE {math.degrees(pitch_rad):.4f}")
 
     def read_pitch_rad(self) -> float:

@@ -18,6 +18,7 @@ from ornitail.acquisition.actuator_interfaces import (
     ConnectedOverOnePort,
     PitchStrut,
     Reading,
+    require_pitch_within,
 )
 from ornitail.acquisition.instrument_errors import InstrumentReplyError
 from ornitail.acquisition.line_instrument_connection import LineInstrumentConnection
@@ -28,7 +29,7 @@ from ornitail.acquisition.zaber_ascii import (
     flag_meaning,
     parse_reply,
 )
-from ornitail.core.errors import UserInputError, require_finite
+from ornitail.core.errors import UserInputError
 from ornitail.core.toml_table import TomlTable
 
 ZABER_ASCII = "zaber_ascii"
@@ -208,14 +209,7 @@ class ZaberAsciiStrut(ConnectedOverOnePort, PitchStrut):
         )
 
     def set_pitch(self, pitch_rad: float) -> None:
-        require_finite("pitch_rad", pitch_rad)
-        if not self.pitch_min_rad <= pitch_rad <= self.pitch_max_rad:
-            raise UserInputError(
-                "pitch",
-                f"{math.degrees(pitch_rad):g} deg is outside the rig limit "
-                f"{math.degrees(self.pitch_min_rad):g}..{math.degrees(self.pitch_max_rad):g} deg "
-                f"({self.name})",
-            )
+        require_pitch_within(self.name, pitch_rad, self.pitch_min_rad, self.pitch_max_rad)
         counts = self.settings.counts_for_pitch(pitch_rad)
         if abs(counts) > MAX_COUNTS:
             raise UserInputError(
