@@ -2,7 +2,9 @@
 
 One sweep records one run per tail state (the tailed run, then the tailless run), each a recording directory
 with its own journal and stop record. The runs of one sweep form a chain through ``resumed_from_run_id``, and
-``resume=True`` continues the newest chain of the same plan at its first unfinished set point, in a new run.
+``resume=True`` continues the newest chain of the same plan with the set points it lacks, in new runs, each with
+the wind-off tares that bracket it recorded again (:func:`~ornitail.acquisition.sweep_plan.zero_references`): a
+point's zero comes from its own run, not from another stream taken minutes or hours before.
 
 The balance streams without pause for the whole of a run, moves and settling included, so the sample counter
 never jumps; every set point is a range of rows in that stream. Stopping:
@@ -59,6 +61,7 @@ from ornitail.acquisition.sweep_plan import (
     limit_violations,
     motor_rpm_violations,
     sample_rate_violation,
+    zero_references,
 )
 from ornitail.core.errors import UserInputError
 
@@ -329,6 +332,9 @@ class _SweepContext:
     durations_s: list[float] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     lossy_points: dict[int, str] = field(default_factory=dict)  # plan index -> what it lost
+    recorded_before: set[int] = field(
+        default_factory=set
+    )  # plan indices whole in earlier runs of the chain
     motor_log: MotorRunningLog = field(default_factory=MotorRunningLog)
 
     def observe_motor(self, running: bool) -> None:
@@ -483,7 +489,8 @@ def _run_tail_state(
                     )
                 else:
                     context.lossy_points.pop(point.index, None)
-                    context.completed += 1
+                    if point.index not in context.recorded_before:
+                        context.completed += 1
                 context.durations_s.append(rig.now_s() - started_s)
                 context.emit("recorded", point)
                 _warn_about_record(context, point, record)
@@ -566,19 +573,28 @@ def run_sweep(
     stop = stop or SweepStop()
     chain = previous_sweep_chain(RunCatalog(data_root), plan) if resume else []
     done = completed_plan_points(chain)
-    remaining = [point for point in plan.set_points if point.index not in done]
+    missing = {point.index for point in plan.set_points if point.index not in done}
+    # A point recorded again gets its zero in its own run: its bracketing tares are recorded again with it.
+    again = missing | zero_references(plan.set_points, missing)
+    remaining = [point for point in plan.set_points if point.index in again]
     result = SweepResult(
         status="completed",
         run_directories=list(chain),
         completed_points=len(done),
         total_points=len(plan.set_points),
     )
-    if not remaining:
+    if not missing:
         result.message = "nothing to do: every set point of this plan is already recorded"
         return result
     stream = balance_stream or LiveBalance(rig, sample_rate_hz=plan.sample_rate_hz)
     context = _SweepContext(
-        plan, rig, stop, on_event or (lambda event: None), completed=len(done), stream=stream
+        plan,
+        rig,
+        stop,
+        on_event or (lambda event: None),
+        completed=len(done),
+        stream=stream,
+        recorded_before=done,
     )
     previous_run_id = chain[-1].name if chain else None
     rig.mount_vehicle(plan.tail_id, plan.x_h_m)

@@ -10,6 +10,7 @@ moves. The file format is in ``docs/sweep-plan.md``.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -519,6 +520,34 @@ def _with_set_points(plan: SweepPlan) -> SweepPlan:
         for index, point in enumerate(ordered)
     )
     return SweepPlan(**{**plan.__dict__, "set_points": set_points})
+
+
+def zero_references(set_points: Sequence[SetPoint], measurements: Iterable[int]) -> set[int]:
+    """Plan indices of the wind-off tares that give the measurements ``measurements`` (plan indices) their zero:
+    per measurement, the nearest tare at its pitch before it and the nearest after it, both within its stretch
+    of one tail state (a tail change starts a new run, whose stream the tares of another run do not zero).
+
+    A resumed sweep records these again with the points it records again: a point's zero must come from its
+    own run, taken minutes (not an hour and a restart) from it, or the balance's drift is in its loads.
+    """
+    wanted = set(measurements)
+    references: set[int] = set()
+    for position, point in enumerate(set_points):
+        if point.index not in wanted or point.kind == "tare":
+            continue
+        for step in (-1, 1):
+            other = position + step
+            while 0 <= other < len(set_points):
+                candidate = set_points[other]
+                if candidate.tail_attached != point.tail_attached:
+                    break
+                if candidate.kind == "tare" and math.isclose(
+                    candidate.pitch_rad, point.pitch_rad, abs_tol=1e-9
+                ):
+                    references.add(candidate.index)
+                    break
+                other += step
+    return references
 
 
 def motor_rpm_violations(

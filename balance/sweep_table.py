@@ -370,7 +370,7 @@ def measured_set_points(
     Raises
     ------
     UserInputError
-        If a measurement has no earlier tare at its pitch and tail state, no file with the recorded balance
+        If a measurement has no earlier tare at its pitch and tail state in its run, no file with the recorded balance
         calibration's content is found, or (unless
         ``keep_saturated``) a measurement or tare has saturated or over-range samples.
     """
@@ -390,7 +390,9 @@ def measured_set_points(
     checks = {
         run_id: drift_check(run_id, list(by_pitch.values())) for run_id, by_pitch in grouped.items()
     }
-    tares: dict[tuple[bool, float], RecordedTare] = {}
+    tares: dict[
+        tuple[str, tuple[bool, float]], RecordedTare
+    ] = {}  # (run, tail state and pitch) -> newest
     measured = []
     for position, point in enumerate(points):
         row = point.row
@@ -400,14 +402,16 @@ def measured_set_points(
         run_id = point.recording.run_id
         clock = clocks[run_id]
         if row["kind"] == "tare":
-            tares[key] = recorded_tares[position]
+            tares[run_id, key] = recorded_tares[position]
             continue
-        before = tares.get(key)
+        before = tares.get((run_id, key))
         if before is None:
             raise UserInputError(
                 f"{point.recording.run_directory}: set point {int(row['plan_point_index'])}",
                 f"no wind-off tare at theta = {math.degrees(row['pitch_rad']):.2f} deg "
-                f"({'tailed' if key[0] else 'tailless'}) was recorded before it",
+                f"({'tailed' if key[0] else 'tailless'}) was recorded before it in its run (a tare of another "
+                "run zeroes another stream, taken minutes or hours apart: the balance's drift since would be in "
+                "the loads); record it again with its tare (a resumed sweep records them)",
             )
         after_position = _next_tare_in_run(points, position, key)
         after = None if after_position is None else recorded_tares[after_position]

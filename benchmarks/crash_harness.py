@@ -9,8 +9,9 @@ it kill -9, SIGTERM, SIGHUP or SIGINT (once or twice) at a random moment, then c
   seconds of data, and in wall seconds = what a rig at time scale 1 would lose);
 - after SIGTERM, SIGHUP and SIGINT: the documented exit code, a stop record on every run (none left ``running``),
   the reason naming the signal, and fan, motor and strut in their safe state (queried from the simulator);
-- ``ornitail sweep --resume`` completes without help every time, and every plan point is recorded exactly once
-  across the chain (whole records), with fan, motor and strut safe afterwards;
+- ``ornitail sweep --resume`` completes without help every time, and every plan point is recorded across the chain
+  (whole records), each measurement exactly once (the tares bracketing a point recorded again are recorded again
+  in its run: its zero), with fan, motor and strut safe afterwards;
 - exclusive access: a second sweep on the same rig, and a second ``--resume`` of one crashed chain, are refused
   (exit 5, one line) while the first goes on unharmed.
 
@@ -189,6 +190,23 @@ def whole_record_counts(data_root: Path) -> collections.Counter:
     )
 
 
+def recorded_once_each(data_root: Path, total_points: int) -> bool:
+    """Every plan point journalled whole, each measurement exactly once: a resumed sweep records the wind-off
+    tares that bracket a point it records again a second time (the point's zero comes from its own run)."""
+    records = [
+        record
+        for directory in run_directories(data_root)
+        for record in read_journal(directory)
+        if record.samples_missing_in_record == 0
+    ]
+    measurements = collections.Counter(
+        record.plan_point_index for record in records if record.kind != "tare"
+    )
+    return {record.plan_point_index for record in records} == set(range(total_points)) and all(
+        count == 1 for count in measurements.values()
+    )
+
+
 def sweep_under_way(data_root: Path) -> bool:
     """True once the sweep holds its chain lock: its signal handlers are in place and it is about to connect."""
     locks = data_root / "locks"
@@ -351,10 +369,7 @@ def run_trial(
         trial.resume_status = json.loads((data_root / "resume.out").read_text())["status"]
     except (OSError, ValueError, KeyError):
         trial.resume_status = None
-    counts = whole_record_counts(data_root)
-    trial.exactly_once = set(counts) == set(range(total_points)) and all(
-        count == 1 for count in counts.values()
-    )
+    trial.exactly_once = recorded_once_each(data_root, total_points)
     trial.safe_after_resume = rig_safe(server.control.state())
     trial.link_samples_lost = sum(
         load_recording(directory).effective_metadata["counter_gaps"]["missing_samples"]
@@ -433,12 +448,10 @@ def two_resumes_of_one_crashed_chain(
         for line in (data_root / f"resume-{index}" / "err").read_text().splitlines()
         if line.startswith("ornitail: error")
     ]
-    counts = whole_record_counts(data_root)
     return {
         "exit_codes": codes,
         "refusal": errors[0] if errors else "",
-        "exactly_once": set(counts) == set(range(total_points))
-        and all(count == 1 for count in counts.values()),
+        "exactly_once": recorded_once_each(data_root, total_points),
     }
 
 

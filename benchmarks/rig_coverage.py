@@ -24,6 +24,7 @@ import argparse
 import dataclasses
 import json
 import math
+import shutil
 import sys
 import tempfile
 from importlib.resources import files
@@ -46,7 +47,26 @@ RMS_Z_TARGET = (0.7, 1.3)
 
 
 def one_sweep(seed: int, time_scale: float, root: Path) -> dict[str, dict]:
-    """Record the study plan on the simulated rig with ``seed``, process it, compare with the truth."""
+    """Record the study plan on the simulated rig with ``seed`` under ``root`` (unless ``root`` already holds
+    a completed recording of it), process it, compare with the truth."""
+    if not (root / "completed").exists():
+        shutil.rmtree(root, ignore_errors=True)  # an interrupted recording starts again
+        record_sweep(seed, time_scale, root)
+    # Every run under this seed's root belongs to the sweep (resumed runs included).
+    with tempfile.TemporaryDirectory(prefix="rig-coverage-processed-") as out:
+        processed = process_runs(sorted((root / "runs").iterdir()), Path(out))
+        table = pd.read_csv(processed["table_csv"])
+    configuration = processed["configurations"][0]
+    contribution = configuration["tail_contribution"][0]
+    derivatives = configuration["derivatives"]
+    return truth_comparison(
+        table, contribution, derivatives["derivatives"], derivatives["steady_state"]
+    )
+
+
+def record_sweep(seed: int, time_scale: float, root: Path) -> None:
+    """Record the study plan on the simulated rig with ``seed`` into ``root``, resuming an incomplete sweep;
+    ``root/completed`` marks a whole recording."""
     description = dataclasses.replace(
         read_rig_file(DEFAULT_RIG_FILE), seed=seed, time_scale=time_scale
     )
@@ -63,15 +83,7 @@ def one_sweep(seed: int, time_scale: float, root: Path) -> dict[str, dict]:
         print(f"seed {seed}: {result.message}; resuming", file=sys.stderr, flush=True)
     if result is None or result.status != "completed":
         raise RuntimeError(f"seed {seed}: sweep ended {result.status}: {result.message}")
-    # Every run under this seed's fresh root belongs to the sweep (resumed runs included).
-    processed = process_runs(sorted((root / "runs").iterdir()), root / "processed")
-    table = pd.read_csv(processed["table_csv"])
-    configuration = processed["configurations"][0]
-    contribution = configuration["tail_contribution"][0]
-    derivatives = configuration["derivatives"]
-    return truth_comparison(
-        table, contribution, derivatives["derivatives"], derivatives["steady_state"]
-    )
+    (root / "completed").touch()
 
 
 def summary(z_by_quantity: dict[str, list[float]]) -> dict[str, dict[str, float]]:
@@ -102,6 +114,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", type=int, default=20)
     parser.add_argument("--first-seed", type=int, default=1)
     parser.add_argument("--time-scale", type=float, default=4.0)
+    parser.add_argument(
+        "--keep-runs",
+        type=Path,
+        help="keep each seed's recording in KEEP_RUNS/seed-N; a seed recorded there before is only processed "
+        "again (to compare processing changes on the same recordings)",
+    )
     arguments = parser.parse_args(argv)
     if arguments.seeds < 1 or not (
         math.isfinite(arguments.time_scale) and arguments.time_scale > 0
@@ -110,8 +128,11 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     z_by_quantity: dict[str, list[float]] = {}
     for seed in range(arguments.first_seed, arguments.first_seed + arguments.seeds):
-        with tempfile.TemporaryDirectory(prefix="rig-coverage-") as folder:
-            compared = one_sweep(seed, arguments.time_scale, Path(folder))
+        if arguments.keep_runs is not None:
+            compared = one_sweep(seed, arguments.time_scale, arguments.keep_runs / f"seed-{seed}")
+        else:
+            with tempfile.TemporaryDirectory(prefix="rig-coverage-") as folder:
+                compared = one_sweep(seed, arguments.time_scale, Path(folder))
         for name, entry in compared.items():
             z_by_quantity.setdefault(name, []).append(float(entry["error_in_sigmas"]))
         print(

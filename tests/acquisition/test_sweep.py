@@ -15,7 +15,7 @@ from ornitail.acquisition.catalog import RunCatalog
 from ornitail.acquisition.instrument_errors import InstrumentError
 from ornitail.acquisition.recording_reader import load_recording
 from ornitail.acquisition.sweep import SweepStop, run_sweep
-from ornitail.acquisition.sweep_plan import plan_from_document
+from ornitail.acquisition.sweep_plan import plan_from_document, zero_references
 from ornitail.balance.sweep_table import cycle_averaged_table
 from ornitail.core.errors import UserInputError
 
@@ -146,9 +146,15 @@ def test_stop_request_finishes_the_point_and_resume_completes_the_rest(simulated
         for directory in new_runs
         for i in load_recording(directory).set_points_frame()["plan_point_index"]
     )
-    assert resumed_indices == [2, 3, 4, 5, 6]
-    # Tares of the first run serve the resumed points: the whole chain processes.
-    assert len(cycle_averaged_table(resumed.run_directories)) == 4
+    # The points not recorded, and again the tares that zero them: each point's zero comes from its own run.
+    references = zero_references(plan.set_points, {2, 3, 4, 5, 6})
+    assert references and all(plan.set_points[index].kind == "tare" for index in references)
+    assert resumed_indices == sorted({2, 3, 4, 5, 6} | references)
+    table = cycle_averaged_table(resumed.run_directories)
+    assert len(table) == 4
+    resumed_runs = {load_recording(directory).run_id for directory in new_runs}
+    for point in table[table["plan_point_index"] >= 2].itertuples():
+        assert point.tare_id.split("#")[0] == point.run_id and point.run_id in resumed_runs
     again = run_sweep(plan, simulated_rig, tmp_path, resume=True)
     assert again.completed_points == 7 and "nothing to do" in again.message
 

@@ -13,6 +13,7 @@ from ornitail.acquisition.sweep_plan import (
     load_plan,
     plan_from_document,
     set_point_count,
+    zero_references,
 )
 from ornitail.core.errors import UserInputError
 
@@ -85,6 +86,36 @@ def test_the_steady_states_alternate_tailed_and_tailless_and_each_sweep_returns_
     document["protocol"]["tail_change_s"] = 0
     without = estimated_duration_s(plan_from_document(document))
     assert estimated_duration_s(plan) == pytest.approx(without + 5 * 120.0)
+
+
+def test_a_point_recorded_again_takes_the_tares_that_bracket_it_in_its_stretch():
+    """A resumed sweep records a point again with its zero: the tare just before and just after it at its pitch,
+    never one across a tail change (another run)."""
+    plan = load_plan(STUDY_PLAN)
+    points = plan.set_points
+    stretch = [index for index, _ in enumerate(points)]
+    for position in range(1, len(points)):
+        same = points[position].tail_attached == points[position - 1].tail_attached
+        stretch[position] = stretch[position - 1] if same else position
+    for position, point in enumerate(points):
+        if point.kind == "tare":
+            continue
+        same_pitch_tares = [
+            other
+            for other, candidate in enumerate(points)
+            if candidate.kind == "tare"
+            and stretch[other] == stretch[position]
+            and candidate.pitch_rad == point.pitch_rad
+        ]
+        before = max(other for other in same_pitch_tares if other < position)
+        after = min(other for other in same_pitch_tares if other > position)
+        # every block of the study plan is bracketed, and only points of its block lie between a point and the
+        # tare before it
+        assert zero_references(points, {point.index}) == {before, after}
+        assert all(points[other].kind == "measurement" for other in range(before + 1, position))
+    assert zero_references(points, set()) == set()
+    tares = {p.index for p in points if p.kind == "tare"}
+    assert zero_references(points, tares) == set()  # tares need no zero
 
 
 @pytest.mark.parametrize("interleave", [False, True])

@@ -20,7 +20,7 @@ from ornitail.acquisition.live_balance import LiveBalance
 from ornitail.acquisition.recording_reader import load_recording
 from ornitail.acquisition.set_point_recording import MAX_RETAKES
 from ornitail.acquisition.sweep import run_sweep
-from ornitail.acquisition.sweep_plan import plan_from_document
+from ornitail.acquisition.sweep_plan import plan_from_document, zero_references
 from ornitail.app.cli import main
 from ornitail.app.sweep_session import EXIT_INCOMPLETE, exit_code_of, sweep_result_record
 from ornitail.balance.sweep_table import cycle_averaged_table
@@ -177,13 +177,17 @@ def test_a_point_lossy_through_its_retakes_ends_the_sweep_incomplete_and_resume_
     assert resumed.status == "completed", resumed.message
     assert resumed.completed_points == resumed.total_points == len(plan.set_points)
     new_run = load_recording(resumed.run_directories[-1])
-    assert [record.plan_point_index for record in new_run.set_points] == [target.index]
-    assert new_run.set_points[0].samples_missing_in_record == 0
+    # The point again after its wind-off tare (this plan has no bracketing tares), recorded again in its run.
+    (tare,) = zero_references(plan.set_points, {target.index})
+    assert plan.set_points[tare].kind == "tare" and tare < target.index
+    assert [record.plan_point_index for record in new_run.set_points] == [tare, target.index]
+    assert all(record.samples_missing_in_record == 0 for record in new_run.set_points)
     assert new_run.metadata["configuration"]["resumed_from_run_id"] == tailless.run_id
-    # The chain processes: the lossy record is replaced by the new one (whose tare is in the first run).
+    # The chain processes: the lossy record is replaced by the new one, zeroed by its own run's tares.
     table = cycle_averaged_table(resumed.run_directories)
     assert len(table) == 4
-    assert table[table["plan_point_index"] == target.index]["run_id"].tolist() == [new_run.run_id]
+    (again,) = table[table["plan_point_index"] == target.index].itertuples()
+    assert again.run_id == new_run.run_id and again.tare_id.startswith(new_run.run_id)
     again = run_sweep(plan, simulated_rig, data_root, resume=True)
     assert "nothing to do" in again.message
 

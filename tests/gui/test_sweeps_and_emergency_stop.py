@@ -91,14 +91,18 @@ def test_abort_pause_resume_complete_and_process_a_sweep(connected, qtbot, tmp_p
         TOTAL_POINTS,
     )
     assert panel.progress.value() == TOTAL_POINTS
-    # Every point once, none repeated; a point whose record still lost samples on a loaded machine is kept as it
-    # was (journalled with its loss, the run incomplete) and recorded again by the resume: only such a point repeats.
+    # Every measurement once, none repeated; a point whose record still lost samples on a loaded machine is kept as
+    # it was (journalled with its loss, the run incomplete) and recorded again by the resume: only such a point
+    # repeats. A resume records the tares that zero the points it records again in their run, so tares may repeat.
     recorded = [
-        (int(record.plan_point_index), record.samples_missing_in_record > 0)
+        (int(record.plan_point_index), record.kind, record.samples_missing_in_record > 0)
         for directory in result.run_directories
         for record in load_recording(directory).set_points
     ]
-    assert sorted(index for index, lossy in recorded if not lossy) == list(range(TOTAL_POINTS))
+    whole = [(index, kind) for index, kind, lossy in recorded if not lossy]
+    assert sorted({index for index, _ in whole}) == list(range(TOTAL_POINTS))
+    measurements = [index for index, kind in whole if kind != "tare"]
+    assert len(measurements) == len(set(measurements))
     # The live view still streams after the sweep.
     rows = window.data.rows_received
     qtbot.waitUntil(lambda: window.data.rows_received > rows + 1000, timeout=10_000)
