@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -46,6 +45,7 @@ from ornitail.core.input_files import (
     parse_toml_text,
     read_input_bytes,
 )
+from ornitail.core.toml_table import TomlTable
 
 
 @dataclass(frozen=True, eq=False)
@@ -58,13 +58,20 @@ class HotwireFitProvenance:
     max_abs_residual_m_s: float
 
 
+def _law_field_names(law_class: type[KingsLaw | PolynomialHotwireLaw]) -> list[str]:
+    """The law's own fields a law file holds (besides ``law`` and the provenance's fields)."""
+    return [
+        item.name
+        for item in dataclasses.fields(law_class)
+        if item.name not in ("provenance", "content_hash", "path")
+    ]
+
+
 def _law_fields_as_dict(law: KingsLaw | PolynomialHotwireLaw) -> dict[str, Any]:
     fields = {"law": law.law_name}
-    for item in dataclasses.fields(law):
-        if item.name in ("provenance", "content_hash", "path"):
-            continue
-        value = getattr(law, item.name)
-        fields[item.name] = value.tolist() if isinstance(value, np.ndarray) else float(value)
+    for name in _law_field_names(type(law)):
+        value = getattr(law, name)
+        fields[name] = value.tolist() if isinstance(value, np.ndarray) else float(value)
     fields.update(dataclasses.asdict(law.provenance))
     return fields
 
@@ -191,15 +198,6 @@ def save_hotwire_law(law: HotwireLaw, path: str | Path) -> HotwireLaw:
     return dataclasses.replace(law, content_hash=content_hash_of_bytes(data), path=path)
 
 
-def _required_number(fields: dict[str, Any], key: str, source: str) -> float:
-    if key not in fields:
-        raise UserInputError(f"{source}: {key}", "missing")
-    value = fields[key]
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise UserInputError(f"{source}: {key}", f"{value!r} is not a finite number")
-    return float(value)
-
-
 def load_hotwire_law(path: str | Path) -> HotwireLaw:
     """Read a hot-wire law file written by :func:`save_hotwire_law`."""
     path = Path(path)
@@ -209,42 +207,40 @@ def load_hotwire_law(path: str | Path) -> HotwireLaw:
         raise UserInputError(source, "hot-wire law file must end in .toml or .json")
     data = read_input_bytes(path)
     text = decode_text(data, source)
-    fields = parse_json_text(text, source) if suffix == ".json" else parse_toml_text(text, source)
-    if not isinstance(fields, dict):
-        raise UserInputError(source, "top level must be a table of keys")
+    document = parse_json_text(text, source) if suffix == ".json" else parse_toml_text(text, source)
+    laws = {law_class.law_name: law_class for law_class in (KingsLaw, PolynomialHotwireLaw)}
+    # the law's name first: it decides which keys the file may have
+    everything = document if isinstance(document, dict) else {}
+    law_name = TomlTable(path, "", document, everything).text("law", choices=tuple(laws))
+    law_class = laws[law_name]
+    provenance_keys = [item.name for item in dataclasses.fields(HotwireFitProvenance)]
+    fields = TomlTable(path, "", document, ["law", *_law_field_names(law_class), *provenance_keys])
     provenance = HotwireFitProvenance(
-        points_content_hash=str(fields.get("points_content_hash", "")),
-        point_count=int(_required_number(fields, "point_count", source)),
-        rms_residual_m_s=_required_number(fields, "rms_residual_m_s", source),
-        max_abs_residual_m_s=_required_number(fields, "max_abs_residual_m_s", source),
+        points_content_hash=fields.text("points_content_hash", "", empty=True),
+        point_count=fields.integer("point_count"),
+        rms_residual_m_s=fields.number("rms_residual_m_s"),
+        max_abs_residual_m_s=fields.number("max_abs_residual_m_s"),
     )
+    reference_temperature_k = fields.number("reference_temperature_k")
+    wire_temperature_k = fields.number("wire_temperature_k")
+    if wire_temperature_k <= reference_temperature_k:
+        raise UserInputError(
+            fields.where("wire_temperature_k"),
+            f"{wire_temperature_k:g} must be above reference_temperature_k {reference_temperature_k:g}",
+        )
     common = {
-        "reference_temperature_k": _required_number(fields, "reference_temperature_k", source),
-        "wire_temperature_k": _required_number(fields, "wire_temperature_k", source),
+        "reference_temperature_k": reference_temperature_k,
+        "wire_temperature_k": wire_temperature_k,
         "provenance": provenance,
         "content_hash": content_hash_of_bytes(data),
         "path": path,
     }
-    if common["wire_temperature_k"] <= common["reference_temperature_k"]:
-        raise UserInputError(
-            f"{source}: wire_temperature_k", "must be above reference_temperature_k"
-        )
-    law_name = fields.get("law")
-    if law_name == "king":
-        law = KingsLaw(
-            a_v2=_required_number(fields, "a_v2", source),
-            b=_required_number(fields, "b", source),
-            exponent_n=_required_number(fields, "exponent_n", source),
+    if law_class is KingsLaw:
+        return KingsLaw(
+            a_v2=fields.number("a_v2"),
+            b=fields.number("b", positive=True),
+            exponent_n=fields.number("exponent_n", positive=True),
             **common,
         )
-        if law.b <= 0.0 or law.exponent_n <= 0.0:
-            raise UserInputError(f"{source}: b, exponent_n", "must both be positive")
-        return law
-    if law_name == "polynomial":
-        coefficients = fields.get("coefficients")
-        if not isinstance(coefficients, list) or len(coefficients) < 2:
-            raise UserInputError(f"{source}: coefficients", "needs a list of at least 2 numbers")
-        values = {f"coefficients[{i}]": item for i, item in enumerate(coefficients)}
-        checked = [_required_number(values, key, source) for key in values]
-        return PolynomialHotwireLaw(coefficients=np.array(checked), **common)
-    raise UserInputError(f"{source}: law", f"{law_name!r} is not 'king' or 'polynomial'")
+    coefficients = fields.numbers("coefficients", 2, "c_0..c_k (m/s per V^k)", or_more=True)
+    return PolynomialHotwireLaw(coefficients=np.array(coefficients), **common)

@@ -1,8 +1,9 @@
 """Typed reading of one table of a TOML file, every mistake naming the file, table and key.
 
-Rig files, sweep plans and model files all read their tables through :class:`TomlTable`, so a user sees the same
-kind of one-line message for the same kind of mistake, e.g. ``rig.toml: [limits].pitch_deg: 'x' must be a finite
-number``.
+Rig files, sweep plans, gap baselines, campaign files and hot-wire law files (TOML or JSON) read their tables
+through :class:`TomlTable`, so a user sees the same kind of one-line message for the same kind of mistake, e.g.
+``rig.toml: [limits].pitch_deg: 'x' must be a finite number`` (``campaign.toml: seed: -1 must be >= 0`` for a key
+at a file's top level).
 """
 
 from __future__ import annotations
@@ -33,6 +34,13 @@ def is_finite_number(value: Any) -> bool:
     return not isinstance(value, bool) and isinstance(value, int | float) and math.isfinite(value)
 
 
+def _place(path: Path, section: str, key: str = "") -> str:
+    """``"<file>: [<section>].<key>"`` (``"<file>: <key>"`` at the top level); without a key, the table."""
+    if not section:
+        return f"{path}: {key}" if key else str(path)
+    return f"{path}: [{section}].{key}" if key else f"{path}: [{section}]"
+
+
 class TomlTable:
     """Typed access to one table of a TOML file.
 
@@ -41,9 +49,10 @@ class TomlTable:
     path : pathlib.Path
         The file (named in every message; relative file fields resolve against its folder).
     section : str
-        The table's name, e.g. ``"limits"`` or ``"balance.can"``.
+        The table's name, e.g. ``"limits"``, ``"balance.can"`` or ``"configuration[2].log[1]"``; ``""`` for the
+        file's top level, whose keys are named without brackets.
     table : object
-        The parsed table; anything but a dict is refused.
+        The parsed table (of a TOML or a JSON file); anything but a dict is refused.
     allowed_keys : iterable of str
         Keys the table may have; any other key is refused (a typo must not drop a limit).
     """
@@ -54,19 +63,24 @@ class TomlTable:
         self.path = Path(path)
         self.section = section
         if not isinstance(table, dict):
-            raise UserInputError(f"{path}: [{section}]", "must be a table (a [section] header)")
+            problem = (
+                "must be a table (a [section] header)"
+                if section
+                else "top level must be a table of keys"
+            )
+            raise UserInputError(self.where(), problem)
         self.table = table
         allowed = sorted(allowed_keys)
         unknown = sorted(set(table) - set(allowed))
         if unknown:
             raise UserInputError(
-                f"{path}: [{section}].{unknown[0]}",
-                f"unknown key; allowed keys are {', '.join(allowed)}",
+                self.where(unknown[0]), f"unknown key; allowed keys are {', '.join(allowed)}"
             )
 
-    def where(self, key: str) -> str:
-        """``"<file>: [<section>].<key>"``, the place named in messages."""
-        return f"{self.path}: [{self.section}].{key}"
+    def where(self, key: str = "") -> str:
+        """The place of ``key`` named in messages, e.g. ``"rig.toml: [limits].pitch_deg"`` (without a key, the
+        table itself)."""
+        return _place(self.path, self.section, key)
 
     def get(self, key: str, default: Any = REQUIRED) -> Any:
         """The raw value; a missing key is refused unless a default (None included) is given."""
@@ -80,16 +94,29 @@ class TomlTable:
         """True when ``key`` is missing and its default is None: an optional key a getter returns as None."""
         return key not in self.table and default is None
 
-    def text(self, key: str, default: Any = REQUIRED, choices: Iterable[str] = ()) -> Any:
-        """A non-empty string, one of ``choices`` when given (None for an absent key whose default is None)."""
+    def _child(self, key: str) -> str:
+        """The section name of the table under ``key``."""
+        return f"{self.section}.{key}" if self.section else key
+
+    def text(
+        self,
+        key: str,
+        default: Any = REQUIRED,
+        choices: Iterable[str] = (),
+        *,
+        empty: bool = False,
+    ) -> Any:
+        """A non-empty string (any string with ``empty``), one of ``choices`` when given (None for an absent key
+        whose default is None)."""
         if self._absent(key, default):
             return None
         value = self.get(key, default)
-        if not isinstance(value, str) or not value.strip():
-            raise UserInputError(self.where(key), f"{value!r} must be a non-empty string")
         choices = tuple(choices)
         if choices and value not in choices:
             raise UserInputError(self.where(key), f"{value!r} must be one of {', '.join(choices)}")
+        if not isinstance(value, str) or not (empty or value.strip()):
+            kind = "string" if empty else "non-empty string"
+            raise UserInputError(self.where(key), f"{value!r} must be a {kind}")
         return value
 
     def boolean(self, key: str, default: Any = REQUIRED) -> Any:
@@ -136,27 +163,38 @@ class TomlTable:
             raise UserInputError(self.where(key), f"{value} must be in {minimum}..{maximum}")
         return value
 
-    def numbers(self, key: str, count: int, meaning: str, default: Any = REQUIRED) -> Any:
-        """A list of exactly ``count`` finite numbers; ``meaning`` describes them in the message (None for an
-        absent key whose default is None)."""
+    def numbers(
+        self, key: str, count: int, meaning: str, default: Any = REQUIRED, *, or_more: bool = False
+    ) -> Any:
+        """A list of exactly ``count`` finite numbers (at least ``count`` with ``or_more``); ``meaning`` describes
+        them in the message (None for an absent key whose default is None)."""
         if self._absent(key, default):
             return None
         value = self.get(key, default)
         if (
             not isinstance(value, list)
-            or len(value) != count
+            or (len(value) < count if or_more else len(value) != count)
             or not all(is_finite_number(v) for v in value)
         ):
+            how_many = f"{count} or more" if or_more else f"{count}"
             raise UserInputError(
-                self.where(key), f"{value!r} must be {count} finite numbers {meaning}"
+                self.where(key), f"{value!r} must be {how_many} finite numbers {meaning}"
             )
         return [float(v) for v in value]
 
-    def interval(self, key: str) -> tuple[float, float]:
-        """``[minimum, maximum]`` with minimum below maximum."""
-        low, high = self.numbers(key, 2, "[minimum, maximum]")
+    def interval(
+        self, key: str, default: Any = REQUIRED, bounds: tuple[str, str] = ("minimum", "maximum")
+    ) -> Any:
+        """``[low, high]`` with low below high, ``bounds`` naming the two in messages (None for an absent key
+        whose default is None)."""
+        if self._absent(key, default):
+            return None
+        low_name, high_name = bounds
+        low, high = self.numbers(key, 2, f"[{low_name}, {high_name}]", default)
         if low >= high:
-            raise UserInputError(self.where(key), f"minimum {low:g} must be below maximum {high:g}")
+            raise UserInputError(
+                self.where(key), f"{low_name} {low:g} must be below {high_name} {high:g}"
+            )
         return low, high
 
     def file(self, key: str) -> Path:
@@ -172,3 +210,40 @@ class TomlTable:
         except UserInputError as error:
             raise UserInputError(self.where(key), f"{relative!r}: {error.problem}") from None
         return resolved
+
+    def sub_table(
+        self, key: str, allowed_keys: Iterable[str], default: Any = REQUIRED
+    ) -> TomlTable | None:
+        """The table under ``key`` (section ``<section>.<key>``), checked against ``allowed_keys`` (None for an
+        absent key whose default is None)."""
+        if self._absent(key, default):
+            return None
+        return TomlTable(self.path, self._child(key), self.get(key, default), allowed_keys)
+
+    def tables(
+        self,
+        key: str,
+        allowed_keys: Iterable[str],
+        default: Any = REQUIRED,
+        *,
+        text_key: str | None = None,
+    ) -> Any:
+        """A list of tables (``[[key]]`` headers or an inline list), the n-th (from 1) read as section
+        ``<section>.<key>[n]``; with ``text_key`` a string item stands for the table ``{<text_key> = item}``
+        (None for an absent key whose default is None)."""
+        if self._absent(key, default):
+            return None
+        value = self.get(key, default)
+        if not isinstance(value, list):
+            raise UserInputError(self.where(key), f"{value!r} must be a list of tables")
+        allowed = tuple(allowed_keys)
+        readers = []
+        for number, item in enumerate(value, start=1):
+            section = f"{self._child(key)}[{number}]"
+            if text_key is not None and isinstance(item, str):
+                item = {text_key: item}
+            if not isinstance(item, dict):
+                kinds = "a table" if text_key is None else f"a table or a string ({text_key})"
+                raise UserInputError(_place(self.path, section), f"{item!r} must be {kinds}")
+            readers.append(TomlTable(self.path, section, item, allowed))
+        return readers

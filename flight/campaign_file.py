@@ -12,14 +12,13 @@ hold of the model's discretisation.
 
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import read_toml_file
+from ornitail.core.toml_table import TomlTable
 from ornitail.flight.manoeuvres import DEFAULT_GLITCH_RULE, GLITCH_RULES
 from ornitail.flight.model_file import INPUT_HOLDS
 from ornitail.flight.residual_statistics import COLORED_SIGMA_METHODS
@@ -45,6 +44,18 @@ _RULE_CHOICES = {  # optional top-level keys of a campaign file and their allowe
     "input_hold": INPUT_HOLDS,
     "colored_sigma": COLORED_SIGMA_METHODS,
 }
+_TOP_LEVEL_KEYS = ("seed", "model", "configuration", *_RULE_CHOICES)
+_CONFIGURATION_KEYS = (
+    "tail",
+    "x_h_mm",
+    "label",
+    "planform",
+    "mass_kg",
+    "iyy_kg_m2",
+    "log",
+    "simulate",
+)
+_LOG_KEYS = ("path", "time_range_s")
 
 
 @dataclass(frozen=True)
@@ -104,9 +115,14 @@ def parse_configuration_label(label: str, where: str) -> tuple[str, float]:
     return match.group("tail"), x_h_mm / 1000.0
 
 
-def tail_geometry(tail: str, planform_mm: dict[str, Any] | None, where: str) -> TailGeometry:
-    """Geometry of a study tail, or of a tail given as ``{b_mm, b_le_mm, c_r_mm, c_t_mm}``."""
-    if planform_mm is None:
+_PLANFORM_KEYS = ("b_mm", "b_le_mm", "c_r_mm", "c_t_mm")
+"""Keys of a configuration's ``planform`` table, mm (``b_le_mm`` optional: an elliptical leading edge)."""
+
+
+def tail_geometry(tail: str, planform: TomlTable | None, where: str) -> TailGeometry:
+    """Geometry of a study tail (``planform`` None; ``where`` names the tail in messages), or of a tail given by
+    its ``planform`` table."""
+    if planform is None:
         tails = study_tails()
         if tail not in tails:
             raise UserInputError(
@@ -115,31 +131,13 @@ def tail_geometry(tail: str, planform_mm: dict[str, Any] | None, where: str) -> 
                 "or give its planform (b_mm, b_le_mm, c_r_mm, c_t_mm)",
             )
         return tails[tail].geometry
-    values = {}
-    for key in ("b_mm", "c_r_mm", "c_t_mm"):
-        values[key] = _number(planform_mm, key, f"{where}.planform")
-    b_le = planform_mm.get("b_le_mm")
-    b_le_mm = None if b_le is None else _number(planform_mm, "b_le_mm", f"{where}.planform")
-    geometry = TailGeometry.from_mm(values["b_mm"], b_le_mm, values["c_r_mm"], values["c_t_mm"])
-    return geometry.validate(f"{where}.planform")
-
-
-def _number(table: dict[str, Any], key: str, where: str) -> float:
-    value = table.get(key)
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise UserInputError(f"{where}.{key}", f"must be a number, got {value!r}")
-    if not math.isfinite(value):
-        raise UserInputError(f"{where}.{key}", f"value {value!r} is not a finite number")
-    return float(value)
-
-
-def _positive_or_none(table: dict[str, Any], key: str, where: str) -> float | None:
-    if key not in table:
-        return None
-    value = _number(table, key, where)
-    if value <= 0:
-        raise UserInputError(f"{where}.{key}", f"must be positive, got {value!r}")
-    return value
+    geometry = TailGeometry.from_mm(
+        planform.number("b_mm"),
+        planform.number("b_le_mm", None),
+        planform.number("c_r_mm"),
+        planform.number("c_t_mm"),
+    )
+    return geometry.validate(planform.where())
 
 
 def configuration_from_label(
@@ -169,29 +167,17 @@ def read_campaign_file(path: str | Path) -> CampaignSpec:
     path = Path(path)
     if not path.exists():
         raise UserInputError(str(path), "campaign file not found")
-    document = read_toml_file(path)
-    unknown = sorted(set(document) - {"seed", "model", "configuration", *_RULE_CHOICES})
-    if unknown:
-        raise UserInputError(f"{path}: {unknown[0]}", "unknown top-level key")
-    seed = document.get("seed", DEFAULT_SEED)
-    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
-        raise UserInputError(
-            f"{path}: seed", f"must be a non-negative integer up to {MAX_SEED}, got {seed!r}"
-        )
-    model = document.get("model", DEFAULT_CAMPAIGN_MODEL)
-    if not isinstance(model, str):
-        raise UserInputError(f"{path}: model", "must be a preset name or a model-file path")
+    document = TomlTable(path, "", read_toml_file(path), _TOP_LEVEL_KEYS)
+    seed = document.integer("seed", DEFAULT_SEED, maximum=MAX_SEED)
+    model = document.text("model", DEFAULT_CAMPAIGN_MODEL)
     if model.endswith(".toml") and not Path(model).is_absolute():
         model = str(path.parent / model)
-    tables = document.get("configuration")
-    if not isinstance(tables, list) or not tables:
-        raise UserInputError(f"{path}: [[configuration]]", "no configuration listed")
-    configurations = tuple(
-        _configuration_from_table(table, f"{path}: configuration[{index + 1}]", path.parent)
-        for index, table in enumerate(tables)
-    )
+    tables = document.tables("configuration", _CONFIGURATION_KEYS, default=[])
+    if not tables:
+        raise UserInputError(document.where("configuration"), "no [[configuration]] listed")
+    configurations = tuple(_configuration_from_table(table) for table in tables)
     _require_unique_labels(configurations, str(path))
-    rules = {key: _choice(document, key, str(path)) for key in _RULE_CHOICES}
+    rules = {key: document.text(key, None, choices) for key, choices in _RULE_CHOICES.items()}
     return CampaignSpec(
         configurations=configurations,
         seed=seed,
@@ -203,87 +189,39 @@ def read_campaign_file(path: str | Path) -> CampaignSpec:
     )
 
 
-def _choice(document: dict[str, Any], key: str, where: str) -> str | None:
-    """The value of an optional top-level key that must be one of ``_RULE_CHOICES[key]``."""
-    value = document.get(key)
-    if value is not None and value not in _RULE_CHOICES[key]:
-        raise UserInputError(
-            f"{where}: {key}", f"must be one of {', '.join(_RULE_CHOICES[key])}, got {value!r}"
-        )
-    return value
-
-
-def _configuration_from_table(table: Any, where: str, base: Path) -> ConfigurationSpec:
-    if not isinstance(table, dict):
-        raise UserInputError(where, "must be a table")
-    allowed = {"tail", "x_h_mm", "label", "planform", "mass_kg", "iyy_kg_m2", "log", "simulate"}
-    unknown = sorted(set(table) - allowed)
-    if unknown:
-        raise UserInputError(f"{where}.{unknown[0]}", "unknown key")
-    tail = table.get("tail")
-    if not isinstance(tail, str) or not tail:
-        raise UserInputError(f"{where}.tail", 'must name the tail (e.g. "S3")')
-    x_h_mm = _number(table, "x_h_mm", where)
-    require_tail_position_mm(f"{where}.x_h_mm", x_h_mm)
-    planform = table.get("planform")
-    if planform is not None and not isinstance(planform, dict):
-        raise UserInputError(
-            f"{where}.planform", "must be a table of b_mm, b_le_mm, c_r_mm, c_t_mm"
-        )
-    logs = []
-    for index, entry in enumerate(table.get("log", [])):
-        logs.append(_log_from_table(entry, f"{where}.log[{index + 1}]", base))
-    simulate = table.get("simulate", 0)
-    if (
-        isinstance(simulate, bool)
-        or not isinstance(simulate, int)
-        or not 0 <= simulate <= MAX_SIMULATED_MANOEUVRES
-    ):
-        raise UserInputError(
-            f"{where}.simulate",
-            f"must be a number of manoeuvres in 0..{MAX_SIMULATED_MANOEUVRES}, got {simulate!r}",
-        )
+def _configuration_from_table(table: TomlTable) -> ConfigurationSpec:
+    """One ``[[configuration]]`` table: tail, position, planform, mass properties and its data source."""
+    tail = table.text("tail")
+    x_h_mm = table.number("x_h_mm")
+    require_tail_position_mm(table.where("x_h_mm"), x_h_mm)
+    planform = table.sub_table("planform", _PLANFORM_KEYS, None)
+    entries = table.tables("log", _LOG_KEYS, default=[], text_key="path")
+    logs = tuple(_log_from_table(entry) for entry in entries)
+    simulate = table.integer("simulate", 0, maximum=MAX_SIMULATED_MANOEUVRES)
     if not logs and simulate == 0:
-        raise UserInputError(where, "lists no [[configuration.log]] and simulate = 0: no data")
+        raise UserInputError(
+            table.where(), "lists no [[configuration.log]] and simulate = 0: no data"
+        )
     if logs and simulate:
-        raise UserInputError(where, "give either logs or simulate, not both")
-    label = table.get("label", f"{tail}@{x_h_mm:g}")
-    if not isinstance(label, str) or not label:
-        raise UserInputError(f"{where}.label", "must be a non-empty string")
+        raise UserInputError(table.where(), "give either logs or simulate, not both")
     return ConfigurationSpec(
-        label=label,
+        label=table.text("label", f"{tail}@{x_h_mm:g}"),
         tail=tail,
         x_h_m=x_h_mm / 1000.0,
-        geometry=tail_geometry(tail, planform, where),
-        logs=tuple(logs),
+        geometry=tail_geometry(tail, planform, table.where("tail")),
+        logs=logs,
         simulated_manoeuvres=simulate,
-        mass_kg=_positive_or_none(table, "mass_kg", where),
-        iyy_kg_m2=_positive_or_none(table, "iyy_kg_m2", where),
+        mass_kg=table.number("mass_kg", None, positive=True),
+        iyy_kg_m2=table.number("iyy_kg_m2", None, positive=True),
     )
 
 
-def _log_from_table(entry: Any, where: str, base: Path) -> LogSource:
-    if isinstance(entry, str):
-        entry = {"path": entry}
-    if not isinstance(entry, dict) or not isinstance(entry.get("path"), str):
-        raise UserInputError(where, 'must give path = "log.csv" (and optionally time_range_s)')
-    unknown = sorted(set(entry) - {"path", "time_range_s"})
-    if unknown:
-        raise UserInputError(f"{where}.{unknown[0]}", "unknown key")
-    log_path = Path(entry["path"])
+def _log_from_table(entry: TomlTable) -> LogSource:
+    """One log of a configuration: its path (relative to the campaign file) and optional time range."""
+    log_path = Path(entry.text("path"))
     if not log_path.is_absolute():
-        log_path = base / log_path
-    time_range = entry.get("time_range_s")
-    if time_range is not None:
-        if (
-            not isinstance(time_range, list)
-            or len(time_range) != 2
-            or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in time_range)
-            or not time_range[0] < time_range[1]
-        ):
-            raise UserInputError(f"{where}.time_range_s", f"{time_range!r} is not [start, end]")
-        time_range = (float(time_range[0]), float(time_range[1]))
-    return LogSource(log_path, time_range)
+        log_path = entry.path.parent / log_path
+    return LogSource(log_path, entry.interval("time_range_s", None, bounds=("start", "end")))
 
 
 def _require_unique_labels(configurations: tuple[ConfigurationSpec, ...], where: str) -> None:

@@ -93,3 +93,106 @@ def test_none_is_a_default_like_any_other():
     assert reader.number("rate", None) == 10.0  # a present key is read and checked as before
     with pytest.raises(UserInputError, match="finite"):
         reader.number("bad", None)
+
+
+def test_top_level_keys_are_named_without_brackets():
+    top = TomlTable("f.json", "", {"seed": -1}, {"seed"})
+    assert top.where() == "f.json" and top.where("seed") == "f.json: seed"
+    with pytest.raises(UserInputError, match=r"^f\.json: seed: -1 must be >= 0$"):
+        top.integer("seed")
+    with pytest.raises(UserInputError, match=r"^f\.json: top level must be a table of keys$"):
+        TomlTable("f.json", "", [1, 2], {"seed"})
+    with pytest.raises(
+        UserInputError, match=r"^f\.json: typo: unknown key; allowed keys are seed$"
+    ):
+        TomlTable("f.json", "", {"typo": 1}, {"seed"})
+
+
+def test_lists_of_tables_name_each_table():
+    document = {"run": [{"path": "a.csv"}, "b.csv"], "none": []}
+    top = TomlTable("f.toml", "", document, {"run", "none"})
+    first, second = top.tables("run", {"path"}, text_key="path")
+    assert (first.section, second.section) == ("run[1]", "run[2]")
+    assert second.where("path") == "f.toml: [run[2]].path"
+    assert (first.text("path"), second.text("path")) == ("a.csv", "b.csv")
+    assert top.tables("none", {"path"}) == []
+    assert top.tables("absent", {"path"}, None) is None
+    assert top.tables("absent", {"path"}, []) == []
+
+
+@pytest.mark.parametrize(
+    ("document", "read", "message"),
+    [
+        (
+            {"run": "a.csv"},
+            lambda t: t.tables("run", {"path"}),
+            r"^f\.toml: \[s\]\.run: 'a\.csv' must be a list of tables$",
+        ),
+        (
+            {"run": [3]},
+            lambda t: t.tables("run", {"path"}),
+            r"^f\.toml: \[s\.run\[1\]\]: 3 must be a table$",
+        ),
+        (
+            {"run": ["a.csv", 3]},
+            lambda t: t.tables("run", {"path"}, text_key="path"),
+            r"^f\.toml: \[s\.run\[2\]\]: 3 must be a table or a string \(path\)$",
+        ),
+        (
+            {"run": [{"path": "a", "pth": "b"}]},
+            lambda t: t.tables("run", {"path"}),
+            r"^f\.toml: \[s\.run\[1\]\]\.pth: unknown key; allowed keys are path$",
+        ),
+        (
+            {"run": [{"path": "a"}, {"when": [2.0, 1.0]}]},
+            lambda t: [
+                r.interval("when", None, bounds=("start", "end"))
+                for r in t.tables("run", {"path", "when"})
+            ],
+            r"^f\.toml: \[s\.run\[2\]\]\.when: start 2 must be below end 1$",
+        ),
+        (
+            {"run": {"b": 1}},
+            lambda t: t.sub_table("run", {"a"}),
+            r"^f\.toml: \[s\.run\]\.b: unknown key; allowed keys are a$",
+        ),
+        ({"run": 3}, lambda t: t.sub_table("run", {"a"}), r"^f\.toml: \[s\.run\]: must be a table"),
+        (
+            {},
+            lambda t: t.sub_table("run", {"a"}),
+            r"^f\.toml: \[s\]\.run: required key is missing$",
+        ),
+    ],
+)
+def test_list_and_sub_table_mistakes_name_the_table(document, read, message):
+    with pytest.raises(UserInputError, match=message):
+        read(TomlTable("f.toml", "s", document, {"run"}))
+
+
+def test_sub_tables_intervals_number_lists_and_strings():
+    document = {"planform": {"b_mm": 120}, "when": [1, 2], "c": [1, 2, 3], "hash": "", "rule": 25}
+    reader = TomlTable("f.toml", "s", document, set(document))
+    planform = reader.sub_table("planform", {"b_mm", "c_mm"})
+    assert planform.section == "s.planform" and planform.number("b_mm") == 120.0
+    assert planform.where("c_mm") == "f.toml: [s.planform].c_mm"
+    assert reader.sub_table("absent", {"b_mm"}, None) is None
+    assert reader.interval("when", bounds=("start", "end")) == (1.0, 2.0)
+    assert reader.interval("absent", None) is None
+    assert reader.numbers("c", 2, "c_0..c_k", or_more=True) == [1.0, 2.0, 3.0]
+    with pytest.raises(
+        UserInputError, match=r"\[s\]\.when: \[1, 2\] must be 3 or more finite numbers c_k"
+    ):
+        reader.numbers("when", 3, "c_k", or_more=True)
+    with pytest.raises(
+        UserInputError, match=r"\[s\]\.c: \[1, 2, 3\] must be 2 finite numbers \[start, end\]"
+    ):
+        reader.interval("c", bounds=("start", "end"))
+    assert reader.text("hash", empty=True) == ""
+    assert reader.text("absent", "", empty=True) == ""
+    with pytest.raises(UserInputError, match=r"\[s\]\.hash: '' must be a non-empty string"):
+        reader.text("hash")
+    with pytest.raises(UserInputError, match=r"\[s\]\.rule: 25 must be a string"):
+        reader.text("rule", empty=True)
+    # a choice names the choices whatever the wrong value's type
+    with pytest.raises(UserInputError, match=r"\[s\]\.rule: 25 must be one of a, b"):
+        reader.text("rule", choices=("a", "b"))

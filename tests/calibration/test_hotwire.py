@@ -189,9 +189,14 @@ def test_law_files_round_trip_with_the_file_hash(tmp_path, suffix, law_name):
 @pytest.mark.parametrize(
     ("content", "suffix", "words"),
     [
-        ('law = "king"\n', ".toml", "missing"),
+        ('law = "king"\n', ".toml", r"law\.toml: point_count: required key is missing"),
         ("{not json", ".json", "not valid JSON"),
-        (json.dumps({"law": "cubic"}), ".json", "missing"),
+        (
+            json.dumps({"law": "cubic"}),
+            ".json",
+            r"law\.json: law: 'cubic' must be one of king, poly",
+        ),
+        ("[1, 2]", ".json", r"law\.json: top level must be a table of keys"),
         ("law = 3", ".yaml", "must end in .toml or .json"),
     ],
 )
@@ -199,4 +204,53 @@ def test_bad_law_files_are_user_errors(tmp_path, content, suffix, words):
     path = tmp_path / f"law{suffix}"
     path.write_text(content)
     with pytest.raises(UserInputError, match=words):
+        load_hotwire_law(path)
+
+
+@pytest.mark.parametrize(
+    ("law_name", "suffix", "old", "new", "message"),
+    [
+        ("king", ".toml", "\nb = ", "\nb = -", r"law\.toml: b: -[0-9.e-]+ must be > 0"),
+        (
+            "king",
+            ".toml",
+            "point_count = 15",
+            "point_count = 1.5",
+            r"point_count: 1\.5 must be a whole",
+        ),
+        (
+            "king",
+            ".toml",
+            "\n",
+            "\nnote = 1\n",
+            r"law\.toml: note: unknown key; allowed keys are a_v2",
+        ),
+        (
+            "king",
+            ".json",
+            '"wire_temperature_k": 523.15',
+            '"wire_temperature_k": 200',
+            r"law\.json: wire_temperature_k: 200 must be above reference_temperature_k",
+        ),
+        (
+            "polynomial",
+            ".json",
+            '"coefficients": [',
+            '"coefficients": ["x", ',
+            r"law\.json: coefficients: \['x', .* must be 2 or more finite numbers",
+        ),
+        ("polynomial", ".toml", "law = ", "a_v2 = 1.0\nlaw = ", r"law\.toml: a_v2: unknown key"),
+    ],
+)
+def test_law_file_fields_are_checked(tmp_path, law_name, suffix, old, new, message):
+    points = synthetic_points(9)
+    fit = (
+        fit_kings_law(points, WIRE_K) if law_name == "king" else fit_polynomial_law(points, WIRE_K)
+    )
+    path = tmp_path / f"law{suffix}"
+    save_hotwire_law(fit.law, path)
+    text = path.read_text()
+    assert old in text
+    path.write_text(text.replace(old, new, 1))
+    with pytest.raises(UserInputError, match=message):
         load_hotwire_law(path)

@@ -57,10 +57,40 @@ def test_campaign_file_is_read_with_paths_relative_to_it(tmp_path: Path):
     [
         ("x_h_mm = 98", "x_h_mm = 980", r"x_h_mm: tail position 980 mm is outside"),
         ('tail = "X1"', 'tail = "Q9"\nplanform_x = 1', r"planform_x: unknown key"),
-        ("mass_kg = 0.0235", "mass_kg = -1.0", r"mass_kg: must be positive"),
-        ("time_range_s = [10.0, 300.0]", "time_range_s = [300.0, 10.0]", r"is not \[start, end\]"),
-        ("seed = 7", 'seed = "a"', r"seed: must be a non-negative integer"),
-        ('log = ["x1.csv"]', "", r"configuration\[2\]: lists no"),
+        (
+            "mass_kg = 0.0235",
+            "mass_kg = -1.0",
+            r"\[configuration\[1\]\]\.mass_kg: -1\.0 must be > 0",
+        ),
+        (
+            "time_range_s = [10.0, 300.0]",
+            "time_range_s = [300.0, 10.0]",
+            r"\[configuration\[1\]\.log\[1\]\]\.time_range_s: start 300 must be below end 10",
+        ),
+        ("seed = 7", 'seed = "a"', r"campaign\.toml: seed: 'a' must be a whole number"),
+        ("seed = 7", "seed = 4294967296", r"seed: 4294967296 must be in 0\.\.4294967295"),
+        ('log = ["x1.csv"]', "", r"\[configuration\[2\]\]: lists no"),
+        (
+            'log = ["x1.csv"]',
+            "log = [3]",
+            r"\[configuration\[2\]\.log\[1\]\]: 3 must be a table or",
+        ),
+        (
+            'log = ["x1.csv"]',
+            'log = "x1.csv"',
+            r"\[configuration\[2\]\]\.log: 'x1.csv' must be a list",
+        ),
+        (
+            "b_mm = 120,",
+            "b_mm = 120, span = 1,",
+            r"\[configuration\[2\]\.planform\]\.span: unknown key",
+        ),
+        (
+            "c_t_mm = 50",
+            "c_t_mm = nan",
+            r"\[configuration\[2\]\.planform\]\.c_t_mm: nan must be a finite",
+        ),
+        ("simulate = 0", "simulate = 5", r"\[configuration\[2\]\]: give either logs or simulate"),
     ],
 )
 def test_campaign_file_mistakes_are_refused(tmp_path: Path, replace, by, message):
@@ -75,7 +105,7 @@ def test_unknown_tail_without_planform_is_refused(tmp_path: Path):
     planform_line = "planform = { b_mm = 120, b_le_mm = 80, c_r_mm = 90, c_t_mm = 50 }"
     assert planform_line in CAMPAIGN
     path.write_text(CAMPAIGN.replace(planform_line, ""))
-    with pytest.raises(UserInputError, match=r"unknown tail 'X1'"):
+    with pytest.raises(UserInputError, match=r"\[configuration\[2\]\]\.tail: unknown tail 'X1'"):
         read_campaign_file(path)
 
 
@@ -115,14 +145,40 @@ def test_campaign_rules_default_to_the_study_and_are_read_from_the_file(tmp_path
 @pytest.mark.parametrize(
     ("line", "message"),
     [
-        ('selection_rule = "best"', r"selection_rule: must be one of most_wins, lowest_mean_rms"),
-        ("glitch_rule = 25", r"glitch_rule: must be one of steady_deviation, sample_jump"),
-        ('input_hold = "linear"', r"input_hold: must be one of first_order, zero_order"),
-        ('colored_sigma = "white"', r"colored_sigma: must be one of morelli, tapered, morelli_sm"),
+        (
+            'selection_rule = "best"',
+            r"campaign\.toml: selection_rule: 'best' must be one of most_wins, lowest_mean_rms",
+        ),
+        ("glitch_rule = 25", r"glitch_rule: 25 must be one of steady_deviation, sample_jump"),
+        ('input_hold = "linear"', r"input_hold: 'linear' must be one of first_order, zero_order"),
+        (
+            'colored_sigma = "white"',
+            r"colored_sigma: 'white' must be one of morelli, tapered, morel",
+        ),
     ],
 )
 def test_unknown_rules_are_refused(tmp_path: Path, line, message):
     path = tmp_path / "campaign.toml"
     path.write_text(line + "\n" + CAMPAIGN)
+    with pytest.raises(UserInputError, match=message):
+        read_campaign_file(path)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        (
+            "seeds = 1\n" + CAMPAIGN,
+            r"campaign\.toml: seeds: unknown key; allowed keys are colored_sig",
+        ),
+        ("configuration = []\n", r"campaign\.toml: configuration: no \[\[configuration\]\] listed"),
+        ("seed = 1\n", r"campaign\.toml: configuration: no \[\[configuration\]\] listed"),
+        ("configuration = [1]\n", r"campaign\.toml: \[configuration\[1\]\]: 1 must be a table"),
+        ("model = 3\n" + CAMPAIGN, r"campaign\.toml: model: 3 must be a non-empty string"),
+    ],
+)
+def test_top_level_mistakes_are_refused(tmp_path: Path, text, message):
+    path = tmp_path / "campaign.toml"
+    path.write_text(text)
     with pytest.raises(UserInputError, match=message):
         read_campaign_file(path)
