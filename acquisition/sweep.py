@@ -213,15 +213,27 @@ def previous_sweep_chain(catalog: RunCatalog, plan: SweepPlan) -> list[Path]:
     return [catalog.data_root / run.run_directory for run in reversed(chain)]
 
 
-def completed_plan_points(run_directories: Iterable[Path]) -> set[int]:
-    """Plan indices of the set points journalled with a whole record in these runs (a record that still lost
-    samples after its retakes does not count: a resume records that point again)."""
-    return {
-        record.plan_point_index
-        for directory in run_directories
-        for record in read_journal(Path(directory))
-        if record.samples_missing_in_record == 0
-    }
+def completed_plan_points(run_directories: Iterable[Path], plan: SweepPlan) -> set[int]:
+    """Plan indices of the set points of ``plan`` journalled with a whole record in these runs: a tare whole, a
+    measurement whole with the tares that zero it (:func:`zero_references`) whole in its own run. A record that
+    still lost samples after its retakes does not count, nor does a measurement whose tare did: a resume
+    records them again."""
+    done: set[int] = set()
+    for directory in run_directories:
+        whole = {
+            record.plan_point_index
+            for record in read_journal(Path(directory))
+            if record.samples_missing_in_record == 0
+        }
+        for index in whole:
+            if index >= len(plan.set_points) or plan.set_points[index].index != index:
+                continue  # not a point of this plan
+            if (
+                plan.set_points[index].kind == "tare"
+                or zero_references(plan.set_points, {index}) <= whole
+            ):
+                done.add(index)
+    return done
 
 
 class SweepChainBusy(UserInputError):
@@ -572,7 +584,7 @@ def run_sweep(
     data_root = Path(data_root)
     stop = stop or SweepStop()
     chain = previous_sweep_chain(RunCatalog(data_root), plan) if resume else []
-    done = completed_plan_points(chain)
+    done = completed_plan_points(chain, plan)
     missing = {point.index for point in plan.set_points if point.index not in done}
     # A point recorded again gets its zero in its own run: its bracketing tares are recorded again with it.
     again = missing | zero_references(plan.set_points, missing)

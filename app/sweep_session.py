@@ -326,7 +326,7 @@ def _summary_from_files(
             chain = previous_sweep_chain(RunCatalog(data_root), plan)
         except Exception:  # the catalog is unusable: list this process's new runs only
             chain = [data_root / "runs" / name for name in new_runs]
-    done = completed_plan_points(chain)
+    done = completed_plan_points(chain, plan)
     total = len(plan.set_points)
     recorded = (
         f"recorded {len(done)} of {total} set points"

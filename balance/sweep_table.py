@@ -231,7 +231,10 @@ def _recorded_points(run_directories: Iterable[Path]) -> list[_RecordedPoint]:
 
 
 def _without_superseded(points: list[_RecordedPoint]) -> list[_RecordedPoint]:
-    """Drop lossy records whose plan point a later run of the same chain recorded again (a resumed sweep)."""
+    """Drop records whose plan point a later run of the same chain recorded again (a resumed sweep): every
+    earlier record of a measurement (a resume records a measurement again only when its record or the tare that
+    zeroes it lost samples), and lossy records of a tare (a whole tare recorded again to zero a resumed point
+    still zeroes the points of its own run)."""
     resumed_from = {
         point.recording.run_id: point.recording.metadata.get("configuration", {}).get(
             "resumed_from_run_id"
@@ -254,9 +257,8 @@ def _without_superseded(points: list[_RecordedPoint]) -> list[_RecordedPoint]:
     for point in points:
         run_id = point.recording.run_id
         later = recorded_in[point.record.plan_point_index] - {run_id}
-        if point.record.samples_missing_in_record and any(
-            continues(other, run_id) for other in later
-        ):
+        superseded = point.record.kind != "tare" or point.record.samples_missing_in_record
+        if superseded and any(continues(other, run_id) for other in later):
             continue
         kept.append(point)
     return kept

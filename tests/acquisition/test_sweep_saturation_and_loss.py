@@ -141,11 +141,23 @@ def test_a_gauge_held_at_the_rail_is_reported_from_the_sweep_to_process(
     assert (table[table["plan_point_index"] != target.index]["saturated_samples"] == 0).all()
 
 
+@pytest.mark.parametrize("kind", ["measurement", "tare"])
 def test_a_point_lossy_through_its_retakes_ends_the_sweep_incomplete_and_resume_records_it(
-    simulated_rig, plan, tmp_path, cli
+    simulated_rig, plan, tmp_path, cli, kind
 ):
     board = simulated_rig.simulators.daq_board
-    target = first_tailed_measurement(plan)
+    target = next(p for p in plan.set_points if p.kind == kind and p.tail_attached)
+    # What a resume must record again: the point, the tares that zero it in its run (this plan has no bracketing
+    # tares: the one before it), and every measurement a lossy tare zeroes (their zero must come from their run).
+    references = zero_references(plan.set_points, {target.index})
+    dependents = {
+        p.index
+        for p in plan.set_points
+        if p.kind == "measurement" and target.index in zero_references(plan.set_points, {p.index})
+    }
+    again_indices = sorted({target.index} | references | dependents)
+    measurements = [index for index in again_indices if plan.set_points[index].kind != "tare"]
+    assert measurements and len(again_indices) > len(measurements)
 
     def on_event(event):
         if event.set_point is not None and event.set_point.index == target.index:
@@ -177,17 +189,15 @@ def test_a_point_lossy_through_its_retakes_ends_the_sweep_incomplete_and_resume_
     assert resumed.status == "completed", resumed.message
     assert resumed.completed_points == resumed.total_points == len(plan.set_points)
     new_run = load_recording(resumed.run_directories[-1])
-    # The point again after its wind-off tare (this plan has no bracketing tares), recorded again in its run.
-    (tare,) = zero_references(plan.set_points, {target.index})
-    assert plan.set_points[tare].kind == "tare" and tare < target.index
-    assert [record.plan_point_index for record in new_run.set_points] == [tare, target.index]
+    assert [record.plan_point_index for record in new_run.set_points] == again_indices
     assert all(record.samples_missing_in_record == 0 for record in new_run.set_points)
     assert new_run.metadata["configuration"]["resumed_from_run_id"] == tailless.run_id
-    # The chain processes: the lossy record is replaced by the new one, zeroed by its own run's tares.
+    # The chain processes: a measurement recorded again replaces its first record, zeroed by its own run's tare.
     table = cycle_averaged_table(resumed.run_directories)
     assert len(table) == 4
-    (again,) = table[table["plan_point_index"] == target.index].itertuples()
-    assert again.run_id == new_run.run_id and again.tare_id.startswith(new_run.run_id)
+    for measurement in measurements:
+        (again,) = table[table["plan_point_index"] == measurement].itertuples()
+        assert again.run_id == new_run.run_id and again.tare_id.startswith(new_run.run_id)
     again = run_sweep(plan, simulated_rig, data_root, resume=True)
     assert "nothing to do" in again.message
 
