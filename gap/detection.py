@@ -77,16 +77,22 @@ def closure_of(before_sse: float, after_sse: float) -> float:
 
 
 def random_matrix_directions(
-    a_matrix: np.ndarray, b_matrix: np.ndarray, draws: int, seed: int
+    a_matrix: np.ndarray,
+    b_matrix: np.ndarray,
+    draws: int,
+    seed: int,
+    dynamic_rows: tuple[int, ...] = (0, 1, 2),
 ) -> list[tuple[np.ndarray, np.ndarray]]:
-    """``draws`` random directions (dA, dB) in the entries of the dynamic rows (q, u, w) of A and B,
-    each entry scaled by its own size (zero entries stay zero) and the whole normalised to a unit
-    RMS relative change, so a magnitude of 1 changes entries by about 100 % of themselves. The
-    kinematic row (theta' = q) is left alone, as every candidate leaves it."""
+    """``draws`` random directions (dA, dB) in the entries of the ``dynamic_rows`` of A and B (the
+    simulator's q, u, w rows; a model file's rows with parameters), each entry scaled by its own
+    size (zero entries stay zero) and the whole normalised to a unit RMS relative change, so a
+    magnitude of 1 changes entries by about 100 % of themselves. Kinematic rows (theta' = q) are
+    left alone, as every candidate leaves them."""
     generator = np.random.default_rng([seed, 15])
     joined = np.hstack([a_matrix, b_matrix])
-    size = np.abs(joined)
-    size[3:] = 0.0
+    size = np.zeros_like(joined)
+    rows = list(dynamic_rows)
+    size[rows] = np.abs(joined[rows])
     active = size > 0
     directions = []
     for _ in range(draws):

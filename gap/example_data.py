@@ -39,6 +39,7 @@ DEFAULT_MAGNITUDES = {
     "cg_shift_with_x_h": 1.0,
     "pitch_damping": 0.6,
     "input_delay": 0.06,
+    "input_filter": 0.06,
     "theta_drift": 0.008,
 }
 MAX_MAGNITUDE_FACTOR = 20.0

@@ -9,12 +9,20 @@ Simulator effects (only when the baseline is the simulator with that effect swit
 - ``wake_profile``, ``cg_shift_with_x_h``, ``day_to_day_drift``: no single magnitude knob, so
   ``k`` blends the linearisations with the effect off (0) and on (1).
 
-Low-order augmentations of any linear model:
+Low-order augmentations of any linear model, each only where the model has what it acts on
+(otherwise it is skipped, and the report says why: :attr:`CandidateLibrary.skipped`):
 
-- ``iyy_shift``: pitch inertia times (1 + k): the q-row of A and B divided by (1 + k);
-- ``pitch_damping``: M_q changed by k (N m s/rad);
-- ``input_delay``: the elevator acts k seconds after it is logged;
-- ``theta_drift``: the measured pitch attitude drifts by k rad/s.
+- ``iyy_shift``: pitch inertia times (1 + k): the simulator's q-row of A and B divided by
+  (1 + k); a model file's constant ``Iyy`` times (1 + k);
+- ``pitch_damping``: M_q changed by k (N m s/rad for the simulator; a model file's parameter
+  ``Mq``, in its unit);
+- ``input_delay``, ``input_filter``: an input (each one not held constant by the model file)
+  acts k seconds after it is logged, or is logged through a first-order low-pass of time
+  constant k (s); with one such input the names are plain, with several they end in
+  ``_<input>``;
+- ``theta_drift``: the measured output ``theta`` drifts by k (rad/s);
+- ``<output>_bias``: the output is measured with a constant offset k (its unit), for every output
+  the runs hold as absolute values (in deviations from a run-in an offset cancels).
 
 ``added_mass`` and ``iyy_shift`` change the model in the same way (added inertia *is* inertia to
 the rigid-body equations): the data cannot tell them apart, and the ranking reports them together.
@@ -23,23 +31,26 @@ the rigid-body equations): the data cannot tell them apart, and the ranking repo
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
 
 from ornitail.core.errors import UserInputError
-from ornitail.flight.model_file import load_model
+from ornitail.flight.model_file import StateSpaceModelSpec, load_model
+from ornitail.gap.flight_data import MODEL_UNIT
 from ornitail.gap.flight_model import LinearFlightModel
 from ornitail.gap.model_spec import BaselineSpec
 from ornitail.sim.configuration import VehicleConfiguration, study_configuration
 from ornitail.sim.dynamics import TrimNotFoundError, linearise
 from ornitail.sim.effects import EFFECT_SCOPES, EffectSet
 
-MODEL_STATES = ("q", "u", "w", "theta")
 SIMULATOR_MAGNITUDES = {"added_mass": "coefficient", "flapping_frequency_coupling": "gain"}
 SIMULATOR_BLENDS = ("wake_profile", "cg_shift_with_x_h", "day_to_day_drift")
+DELAY_BOUNDS_S = (-0.1, 0.25)
+FILTER_BOUNDS_S = (0.0, 0.25)
+BIAS_RANGE_SPREADS = 3.0  # an output bias may reach 3 x the output's spread over the runs
 
 
 @dataclass(frozen=True)
@@ -51,6 +62,14 @@ class FlightCandidate:
     unit: str
     bounds: tuple[float, float]
     build: Callable[[float], LinearFlightModel]
+
+
+@dataclass(frozen=True)
+class CandidateLibrary:
+    """The candidates a diagnosis fits, and the augmentations it skipped with the reason."""
+
+    candidates: list[FlightCandidate]
+    skipped: dict[str, str]
 
 
 def _simulator_model(configuration: VehicleConfiguration, effects: EffectSet) -> LinearFlightModel:
@@ -71,34 +90,65 @@ def baseline_effects(spec: BaselineSpec) -> EffectSet:
     return EffectSet().without(*spec.effects_off)
 
 
-def baseline_flight_model(spec: BaselineSpec) -> LinearFlightModel:
-    """The baseline as a linear model: the simulator linearised, or a model file's start values."""
+def model_constants(
+    spec: BaselineSpec, data_constants: Mapping[str, float] | None
+) -> dict[str, float]:
+    """The model file's constants, with those it takes from data from ``data_constants``."""
+    model = load_model(spec.model)
+    if model.data_constants and data_constants is None:
+        raise UserInputError(
+            f"{spec.source}: model", "constants taken from data need the flight logs"
+        )
+    return {**model.constants, **(data_constants or {})}
+
+
+def _from_state_space(
+    model: StateSpaceModelSpec, values: Mapping[str, float], constants: Mapping[str, float]
+) -> dict[str, np.ndarray]:
+    """A, B, C, D of ``model`` at these parameter and constant values, as model fields."""
+    numeric = model.state_space(values, constants)
+    return {
+        "a_matrix": numeric.a_matrix,
+        "b_matrix": numeric.b_matrix,
+        "c_matrix": numeric.c_matrix,
+        "d_matrix": numeric.d_matrix,
+    }
+
+
+def _dynamic_rows(model: StateSpaceModelSpec, constants: Mapping[str, float]) -> tuple[int, ...]:
+    """State equations whose A or B entries depend on the model's parameters."""
+
+    def joined(values: Mapping[str, float]) -> np.ndarray:
+        numeric = model.state_space(values, constants)
+        return np.hstack([numeric.a_matrix, numeric.b_matrix])
+
+    values = model.start_values()
+    moved = {name: 1.37 * value + 0.0123 for name, value in values.items()}  # every one moves
+    changed = np.any(joined(values) != joined(moved), axis=1)
+    return tuple(int(row) for row in np.flatnonzero(changed))
+
+
+def baseline_flight_model(
+    spec: BaselineSpec, data_constants: Mapping[str, float] | None = None
+) -> LinearFlightModel:
+    """The baseline as a linear model: the simulator linearised, or a model file's start values
+    (with the constants it takes from data from ``data_constants``)."""
     if spec.kind == "simulator":
         configuration = study_configuration(spec.tail, spec.x_h_mm)
         return _simulator_model(configuration, baseline_effects(spec))
     model = load_model(spec.model)
-    if model.states != MODEL_STATES or model.inputs != ("elevator",):
-        raise UserInputError(
-            f"{spec.source}: model",
-            f"{model.name} has states {list(model.states)} and inputs {list(model.inputs)}; "
-            "the flight diagnosis needs states q, u, w, theta and input elevator",
-        )
-    if model.data_constants:
-        raise UserInputError(
-            f"{spec.source}: model", "constants taken from data are not supported here"
-        )
-    numeric = model.state_space(model.start_values(), model.constants)
-    if not (np.allclose(numeric.c_matrix, np.eye(4)) and np.allclose(numeric.d_matrix, 0.0)):
-        raise UserInputError(f"{spec.source}: model", "outputs must be the four states (C = I)")
-    constants = model.constants
+    constants = model_constants(spec, data_constants)
     airspeed = math.hypot(constants.get("u0", math.nan), constants.get("w0", math.nan))
     return LinearFlightModel(
-        a_matrix=numeric.a_matrix,
-        b_matrix=numeric.b_matrix,
+        **_from_state_space(model, model.start_values(), constants),
         iyy_kg_m2=float(constants.get("Iyy", math.nan)),
         theta0_rad=float(constants.get("theta0", math.nan)),
         airspeed_m_s=airspeed,
         input_hold=model.input_hold,
+        state_names=model.states,
+        input_names=model.inputs,
+        output_names=model.outputs,
+        dynamic_rows=_dynamic_rows(model, constants),
     )
 
 
@@ -150,15 +200,16 @@ def _simulator_candidates(spec: BaselineSpec, baseline: LinearFlightModel) -> li
     return candidates
 
 
-def _augmentations(baseline: LinearFlightModel) -> list[FlightCandidate]:
+def _simulator_inertia(baseline: LinearFlightModel) -> list[FlightCandidate]:
+    """``iyy_shift`` and ``pitch_damping`` on the simulator's q-row (state 0)."""
+
     def iyy_shift(k: float) -> LinearFlightModel:
         a_matrix, b_matrix = baseline.a_matrix.copy(), baseline.b_matrix.copy()
         a_matrix[0] /= 1.0 + k
         b_matrix[0] /= 1.0 + k
         return baseline.with_matrices(a_matrix, b_matrix)
 
-    inertia = baseline.iyy_kg_m2 if math.isfinite(baseline.iyy_kg_m2) else 1.0
-    damping_unit = "N m s/rad" if math.isfinite(baseline.iyy_kg_m2) else "1/s"
+    inertia = baseline.iyy_kg_m2
     damping_range = 3.0 * abs(baseline.a_matrix[0, 0]) * inertia + 1e-12
 
     def pitch_damping(k: float) -> LinearFlightModel:
@@ -173,40 +224,160 @@ def _augmentations(baseline: LinearFlightModel) -> list[FlightCandidate]:
         FlightCandidate(
             "pitch_damping",
             "M_q changed by k",
-            damping_unit,
+            "N m s/rad",
             (-damping_range, damping_range),
             pitch_damping,
-        ),
-        FlightCandidate(
-            "input_delay",
-            "elevator acts k s after it is logged",
-            "s",
-            (-0.1, 0.25),
-            lambda k: replace(baseline, delay_s=k),
-        ),
-        FlightCandidate(
-            "theta_drift",
-            "measured theta drifts by k",
-            "rad/s",
-            (-0.05, 0.05),
-            lambda k: replace(baseline, theta_drift_rad_s=k),
         ),
     ]
 
 
-def flight_candidates(spec: BaselineSpec, baseline: LinearFlightModel) -> list[FlightCandidate]:
-    """The candidate library for this baseline, restricted to ``spec.candidates`` when given."""
-    library = _augmentations(baseline)
+def _model_inertia(
+    spec: BaselineSpec, baseline: LinearFlightModel, data_constants: Mapping[str, float] | None
+) -> tuple[list[FlightCandidate], dict[str, str]]:
+    """``iyy_shift`` on the model file's constant ``Iyy``, ``pitch_damping`` on its parameter
+    ``Mq``: each only when the file names it."""
+    model = load_model(spec.model)
+    constants = model_constants(spec, data_constants)
+    values = model.start_values()
+
+    def rebuilt(
+        new_values: Mapping[str, float], new_constants: Mapping[str, float]
+    ) -> LinearFlightModel:
+        return replace(baseline, **_from_state_space(model, new_values, new_constants))
+
+    candidates, skipped = [], {}
+    if "Iyy" in constants:
+        candidates.append(
+            FlightCandidate(
+                "iyy_shift",
+                "constant Iyy times (1 + k)",
+                "fraction",
+                (-0.5, 2.0),
+                lru_cache(maxsize=256)(
+                    lambda k: rebuilt(values, {**constants, "Iyy": constants["Iyy"] * (1 + k)})
+                ),
+            )
+        )
+    else:
+        skipped["iyy_shift"] = f"{model.name} declares no constant Iyy (pitch inertia)"
+    if "Mq" in model.parameter_names:
+        damping_range = 3.0 * abs(values["Mq"]) + 1e-12
+        candidates.append(
+            FlightCandidate(
+                "pitch_damping",
+                "parameter Mq changed by k",
+                model.parameter("Mq").unit or MODEL_UNIT,
+                (-damping_range, damping_range),
+                lru_cache(maxsize=256)(
+                    lambda k: rebuilt({**values, "Mq": values["Mq"] + k}, constants)
+                ),
+            )
+        )
+    else:
+        skipped["pitch_damping"] = f"{model.name} has no parameter Mq (pitch damping)"
+    return candidates, skipped
+
+
+def _input_candidates(baseline: LinearFlightModel, varying: Sequence[int]) -> list[FlightCandidate]:
+    """``input_delay`` and ``input_filter`` on every input in ``varying`` (indices)."""
+    candidates = []
+    for index in varying:
+        name = baseline.input_names[index]
+        suffix = "" if len(varying) == 1 else f"_{name}"
+        candidates += [
+            FlightCandidate(
+                f"input_delay{suffix}",
+                f"{name} acts k s after it is logged",
+                "s",
+                DELAY_BOUNDS_S,
+                lambda k, index=index: baseline.with_input_change(index, delay_s=k),
+            ),
+            FlightCandidate(
+                f"input_filter{suffix}",
+                f"{name} is logged through a first-order low-pass of time constant k",
+                "s",
+                FILTER_BOUNDS_S,
+                lambda k, index=index: baseline.with_input_change(index, filter_s=k),
+            ),
+        ]
+    return candidates
+
+
+def _output_candidates(
+    baseline: LinearFlightModel, absolute: Sequence[bool], spreads: Sequence[float]
+) -> tuple[list[FlightCandidate], dict[str, str]]:
+    """``theta_drift`` on an output ``theta``; ``<output>_bias`` on every absolute output."""
+    candidates, skipped = [], {}
+    names = baseline.output_names
+    if "theta" in names:
+        candidates.append(
+            FlightCandidate(
+                "theta_drift",
+                "measured theta drifts by k",
+                "rad/s",
+                (-0.05, 0.05),
+                lambda k: baseline.with_output_change(names.index("theta"), drift_per_s=k),
+            )
+        )
+    else:
+        skipped["theta_drift"] = "the model has no output theta"
+    for index, name in enumerate(names):
+        if not absolute[index]:
+            skipped[f"{name}_bias"] = (
+                f"the runs hold {name} as deviations from their start, in which a constant "
+                "sensor offset cancels"
+            )
+            continue
+        reach = BIAS_RANGE_SPREADS * spreads[index] + 1e-12
+        candidates.append(
+            FlightCandidate(
+                f"{name}_bias",
+                f"{name} measured with a constant offset k",
+                "unit of " + name,
+                (-reach, reach),
+                lambda k, index=index: baseline.with_output_change(index, bias=k),
+            )
+        )
+    return candidates, skipped
+
+
+def flight_candidates(
+    spec: BaselineSpec,
+    baseline: LinearFlightModel,
+    absolute_outputs: Sequence[bool] | None = None,
+    output_spreads: Sequence[float] | None = None,
+    data_constants: Mapping[str, float] | None = None,
+    varying_inputs: Sequence[int] = (0,),
+) -> CandidateLibrary:
+    """The candidate library for this baseline, restricted to ``spec.candidates`` when given.
+
+    ``absolute_outputs`` (per output; default none) and ``output_spreads`` (each output's
+    standard deviation over the runs, its unit) decide the output-bias candidates;
+    ``varying_inputs`` the inputs that get a delay and a filter; ``data_constants`` complete a
+    model file's constants.
+    """
+    outputs = len(baseline.output_names)
+    absolute = absolute_outputs if absolute_outputs is not None else (False,) * outputs
+    spreads = output_spreads if output_spreads is not None else (0.0,) * outputs
     if spec.kind == "simulator":
-        library = _simulator_candidates(spec, baseline) + library
+        library, skipped = _simulator_candidates(spec, baseline), {}
+        library += _simulator_inertia(baseline)
+    else:
+        library, skipped = _model_inertia(spec, baseline, data_constants)
+    library += _input_candidates(baseline, varying_inputs)
+    measured, measured_skipped = _output_candidates(baseline, absolute, spreads)
+    library += measured
+    skipped |= measured_skipped
     if spec.candidates:
         known = {candidate.name for candidate in library}
         unknown = [name for name in spec.candidates if name not in known]
         if unknown:
+            reason = skipped.get(unknown[0])
             raise UserInputError(
                 f"{spec.source}: [baseline].candidates",
-                f"{unknown[0]!r} is not available for this baseline; available: "
-                f"{', '.join(sorted(known))}",
+                f"{unknown[0]!r} is not available for this baseline"
+                + (f" ({reason})" if reason else "")
+                + f"; available: {', '.join(sorted(known))}",
             )
         library = [candidate for candidate in library if candidate.name in spec.candidates]
-    return library
+    return CandidateLibrary(library, skipped)

@@ -27,7 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ornitail.flight.model_file import load_model
 from ornitail.flight.residual_statistics import residual_tests
+from ornitail.gap.derivative_refit import refit_derivatives
 from ornitail.gap.detection import (
     NULL_DRAWS,
     DetectionRule,
@@ -40,12 +42,13 @@ from ornitail.gap.flight_candidates import (
     flight_candidates,
 )
 from ornitail.gap.flight_data import (
-    CHANNELS,
+    FlightRecord,
     FlightRun,
     RunSplit,
     nested_split_counts,
     nested_splits,
-    read_flight_runs,
+    read_model_runs,
+    read_simulator_record,
 )
 from ornitail.gap.flight_localisation import (
     localise_flight,
@@ -68,10 +71,10 @@ class FlightDiagnosis:
     """The report (JSON-ready dict) and what the plots need.
 
     ``chosen`` is the top-ranked effect fitted on the first fold's training runs;
-    ``after_residuals`` each run's residual (N, 4; SI) as a test run, with the effect chosen and
-    fitted in its own fold. ``scales`` are the measured signals' standard deviations (SI, per
-    channel); ``weights`` the noise levels the fits, ranking and closures divide each channel by
-    (SI, per channel).
+    ``after_residuals`` each run's residual (N, outputs; the model's units) as a test run, with the
+    effect chosen and fitted in its own fold. ``scales`` are the measured signals' standard
+    deviations (per output channel); ``weights`` the noise levels the fits, ranking and closures
+    divide each channel by (per output channel).
     """
 
     report: dict[str, object]
@@ -95,9 +98,9 @@ def noise_scales(
 
 
 def residuals_of(model: LinearFlightModel, runs: Sequence[FlightRun]) -> list[np.ndarray]:
-    """Measured minus simulated states (N, 4) per run."""
+    """Measured minus simulated outputs (N, outputs) per run."""
     return [
-        run.states - predicted
+        run.outputs - predicted
         for run, predicted in zip(runs, simulate_runs(model, runs), strict=True)
     ]
 
@@ -113,18 +116,19 @@ def _input_correlation(
     the residual's RMS over ``reference_rms`` (the baseline's), so a smaller residual counts less.
     """
     stacked = np.concatenate(residuals)
+    channels = tuple(f"y{index}" for index in range(stacked.shape[1]))
     tests = residual_tests(
         stacked,
-        np.concatenate([run.elevator_rad for run in runs])[:, None],
-        CHANNELS,
-        ("elevator",),
+        np.concatenate([run.excitation for run in runs])[:, None],
+        channels,
+        ("input",),
     )
     ratio = np.sqrt(np.mean(stacked**2, axis=0)) / reference_rms
     return float(
         np.mean(
             [
-                tests.max_input_correlation[c].get("elevator", 0.0) * ratio[i]
-                for i, c in enumerate(CHANNELS)
+                tests.max_input_correlation[c].get("input", 0.0) * ratio[i]
+                for i, c in enumerate(channels)
             ]
         )
     )
@@ -187,7 +191,9 @@ def null_rule(
     (SI per channel)."""
     start_sse = float(_channel_sse(residuals_of(start, validation), scales).sum())
     closures = []
-    for a_step, b_step in random_matrix_directions(start.a_matrix, start.b_matrix, draws, seed):
+    for a_step, b_step in random_matrix_directions(
+        start.a_matrix, start.b_matrix, draws, seed, start.dynamic_rows
+    ):
 
         def family(k: float, a_step=a_step, b_step=b_step) -> LinearFlightModel:
             return start.with_matrices(start.a_matrix + k * a_step, start.b_matrix + k * b_step)
@@ -253,7 +259,7 @@ def _score_library(
         start_sse.sum(axis=1),
         float(_channel_sse(residuals_of(start, split.training), split.scales).sum()),
         _input_correlation(start_residuals, split.validation, split.reference_rms),
-        int(sum(len(run.time_s) for run in split.training) * len(CHANNELS)),
+        int(sum(run.outputs.size for run in split.training)),
         split.seed,
         rule,
     )
@@ -296,7 +302,7 @@ def _fold(
     levels on its training runs), and the measured signals' standard deviations there (SI)."""
     training = [runs[i] for i in part.training]
     validation = [runs[i] for i in part.validation]
-    signal_scales = np.concatenate([run.states for run in training]).std(axis=0)
+    signal_scales = np.concatenate([run.outputs for run in training]).std(axis=0)
     signal_scales = np.where(signal_scales > 0, signal_scales, 1.0)
     scales = noise_scales(training, residuals_of(baseline, training), signal_scales)
     reference_rms = np.sqrt(
@@ -304,6 +310,14 @@ def _fold(
     )
     reference_rms = np.where(reference_rms > 0, reference_rms, 1.0)
     return _Split(training, validation, scales, reference_rms, seed), signal_scales
+
+
+def read_record(spec: BaselineSpec, data_paths: Sequence[str | Path]) -> FlightRecord:
+    """The runs of the logs as ``spec``'s baseline reads them: the simulator's four states, or the
+    model file's signals (manoeuvres, or segments of ``spec.segment_s``)."""
+    if spec.kind == "simulator":
+        return read_simulator_record(data_paths)
+    return read_model_runs(data_paths, load_model(spec.model), spec.segment_s)
 
 
 def diagnose_flight(
@@ -317,7 +331,8 @@ def diagnose_flight(
     ``on_step(done, total, what)`` is told of each finished step (the candidate library fitted and ranked on one
     fold of the nested split, the second effect, the localisation), for a progress display.
     """
-    runs = read_flight_runs(data_paths)
+    record = read_record(spec, data_paths)
+    runs = record.runs
     splits = nested_splits(len(runs), seed, ", ".join(str(path) for path in data_paths))
     total_steps = len(splits) + 2
 
@@ -325,10 +340,19 @@ def diagnose_flight(
         if on_step is not None:
             on_step(done, total_steps, what)
 
-    baseline = baseline_flight_model(spec)
+    baseline = baseline_flight_model(spec, record.constants)
+    channels = baseline.output_names
     split, signal_scales = _fold(runs, splits[0], baseline, seed)
     scales = split.scales
-    library = flight_candidates(spec, baseline)
+    candidates = flight_candidates(
+        spec,
+        baseline,
+        record.absolute_outputs,
+        np.concatenate([run.outputs for run in runs]).std(axis=0),
+        record.constants,
+        record.varying_inputs,
+    )
+    library = candidates.candidates
     ranking, fitted, rule = _score_library(library, baseline, baseline, split)
     step(1, f"fold 1 of {len(splits)}: library ranked")
     chosen_model = fitted[ranking.entries[0].name]
@@ -355,7 +379,7 @@ def diagnose_flight(
         step(fold + 1, f"fold {fold} of {len(splits)}: library ranked")
     all_residuals = residuals_of(baseline, runs)
     where = localise_flight(runs, all_residuals, signal_scales, baseline)
-    pointer = sparse_pointer(split.training, residuals_of(baseline, split.training), baseline)
+    pointer = sparse_pointer(split.training, baseline)
     order = np.concatenate([part.test for part in splits])
     counts = np.array([len(runs[i].time_s) for i in order], dtype=float)
     before_sse = _channel_sse([all_residuals[i] for i in order], scales)
@@ -364,10 +388,11 @@ def diagnose_flight(
         spec=spec,
         data_paths=data_paths,
         total_runs=len(runs),
-        split=nested_split_counts(splits, len(runs)) | {"test_choices": choices},
+        split=nested_split_counts(splits, len(runs))
+        | {"test_choices": choices, "runs_cut_into": record.cut},
         ranking=ranking,
         rule=rule,
-        channels=CHANNELS,
+        channels=channels,
         sample_counts=counts,
         before_sse=before_sse,
         after_sse=_channel_sse([after_residuals[i] for i in order], scales),
@@ -376,11 +401,25 @@ def diagnose_flight(
         seed=seed,
         verdict_gap=float(
             np.sqrt(
-                np.sum(before_sse * (scales / signal_scales) ** 2) / (counts.sum() * len(CHANNELS))
+                np.sum(before_sse * (scales / signal_scales) ** 2) / (counts.sum() * len(channels))
             )
         ),
     )
     report["second_effect"] = _second_effect(second, chosen_model, first_test, scales, seed)
+    report["candidates_skipped"] = candidates.skipped
+    report["derivative_refit"] = (
+        refit_derivatives(
+            load_model(spec.model),
+            record.constants,
+            baseline,
+            split.training,
+            first_test,
+            lambda model, runs: _channel_sse(residuals_of(model, runs), scales).sum(axis=1),
+            seed,
+        )
+        if spec.derivative_refit
+        else None
+    )
     step(total_steps, "localised and reported")
     return FlightDiagnosis(
         report,

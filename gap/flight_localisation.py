@@ -1,9 +1,9 @@
 """Where the flight gap lies: channel, frequency band, time segment, steady state, configuration.
 
-Works on the baseline's residuals (measured minus simulated deviations) of every manoeuvre,
-normalised per channel by ``scales`` (the measured standard deviation). Segments: the run-in
-before the input (steady flight), the input (elevator above 10 % of its peak deviation), and the
-free response after it.
+Works on the baseline's residuals (measured minus simulated outputs) of every run, normalised per
+channel by ``scales`` (the measured standard deviation). Channels are the model's outputs.
+Segments: the run-in before the input (steady flight), the input (the exciting input above 10 %
+of its peak deviation), and the free response after it.
 """
 
 from __future__ import annotations
@@ -15,18 +15,18 @@ import numpy as np
 from scipy.stats import linregress
 
 from ornitail.flight.residual_statistics import residual_tests
-from ornitail.gap.flight_data import CHANNEL_UNITS, CHANNELS, FlightRun
+from ornitail.gap.flight_data import FlightRun, output_units
 from ornitail.gap.flight_model import LinearFlightModel
 from ornitail.gap.sparse_regression import sparse_terms
 from ornitail.gap.spectra import band_shares_and_coherence
 
 INPUT_FRACTION = 0.10
 SEGMENTS = ("steady_run_in", "input", "free_response")
-POINTER_FEATURES = ("q", "u", "w", "theta", "elevator", "elevator_rate", "time", "q_abs_q", "one")
 
 
 def _segment_masks(run: FlightRun) -> dict[str, np.ndarray]:
-    active = np.abs(run.elevator_rad) >= INPUT_FRACTION * np.max(np.abs(run.elevator_rad))
+    deviation = np.abs(run.excitation - run.excitation[0])
+    active = deviation >= INPUT_FRACTION * np.max(deviation)
     after_start = run.time_s >= run.input_start_s
     end = run.time_s[active & after_start].max() if np.any(active & after_start) else np.inf
     return {
@@ -89,6 +89,9 @@ def localise_flight(
     baseline: LinearFlightModel,
 ) -> dict[str, object]:
     """The ``where`` section of the report (see the module docstring)."""
+    channels = baseline.output_names
+    units = output_units(channels)
+    input_name = baseline.input_names[runs[0].excitation_index]
     normalised = [residual / scales for residual in residuals]
     stacked = np.concatenate(normalised)
     energy = np.sum(stacked**2, axis=0)
@@ -96,57 +99,65 @@ def localise_flight(
     by_channel = {
         channel: {
             "rms": float(np.sqrt(np.mean(raw[:, index] ** 2))),
-            "unit": CHANNEL_UNITS[index],
+            "unit": units[index],
             "rms_normalised": float(np.sqrt(np.mean(stacked[:, index] ** 2))),
             "energy_share": float(energy[index] / energy.sum()),
         }
-        for index, channel in enumerate(CHANNELS)
+        for index, channel in enumerate(channels)
     }
     bands = band_shares_and_coherence(
-        normalised, [run.elevator_rad for run in runs], runs[0].time_step_s
+        normalised, [run.excitation for run in runs], runs[0].time_step_s
     )
     for band in bands:
         shares = np.array(band["power_share"])
         band["pooled_share"] = float(np.sum(shares * energy) / energy.sum())
-        band["power_share"] = dict(zip(CHANNELS, band["power_share"], strict=True))
+        band["power_share"] = dict(zip(channels, band["power_share"], strict=True))
         band["coherence_with_input"] = dict(
-            zip(CHANNELS, band["coherence_with_input"], strict=True)
+            zip(channels, band["coherence_with_input"], strict=True)
         )
     tests = residual_tests(
         stacked,
-        np.concatenate([run.elevator_rad for run in runs])[:, None],
-        CHANNELS,
-        ("elevator",),
+        np.concatenate([run.excitation for run in runs])[:, None],
+        channels,
+        (input_name,),
     )
-    data_theta = float(np.mean([run.theta0_rad for run in runs]))
-    data_speed = float(np.mean([run.airspeed_m_s for run in runs]))
     where = {
         "by_channel": by_channel,
         "by_band": bands,
         "by_segment": _by_segment(runs, normalised),
         "input_locked_fraction": input_locked_fraction(runs, normalised),
         "by_configuration": _by_configuration(runs, normalised),
-        "steady_state": {
-            "data_theta_deg": math.degrees(data_theta),
-            "model_theta_deg": math.degrees(baseline.theta0_rad),
-            "theta_difference_deg": math.degrees(data_theta - baseline.theta0_rad),
-            "data_v_m_s": data_speed,
-            "model_v_m_s": baseline.airspeed_m_s,
-            "v_difference_m_s": data_speed - baseline.airspeed_m_s,
-        },
+        "steady_state": _steady_state(runs, baseline),
         "residual_tests": {
             "bound": tests.bound,
             "max_autocorrelation": tests.max_autocorrelation,
             "white": tests.white,
-            "max_input_correlation": {c: tests.max_input_correlation[c] for c in CHANNELS},
+            "max_input_correlation": {c: tests.max_input_correlation[c] for c in channels},
             "independent_of_input": tests.independent_of_inputs,
         },
     }
-    where["summary"] = flight_summary(where)
+    where["summary"] = flight_summary(where, input_name)
     return where
 
 
-def _aligned_on_input(runs: Sequence[FlightRun], arrays: Sequence[np.ndarray]) -> np.ndarray:
+def _steady_state(runs: Sequence[FlightRun], baseline: LinearFlightModel) -> dict | None:
+    """The runs' run-in steady state against the model's trim; None when the runs have none
+    (segments of a record)."""
+    if not all(math.isfinite(run.theta0_rad) for run in runs):
+        return None
+    data_theta = float(np.mean([run.theta0_rad for run in runs]))
+    data_speed = float(np.mean([run.airspeed_m_s for run in runs]))
+    return {
+        "data_theta_deg": math.degrees(data_theta),
+        "model_theta_deg": math.degrees(baseline.theta0_rad),
+        "theta_difference_deg": math.degrees(data_theta - baseline.theta0_rad),
+        "data_v_m_s": data_speed,
+        "model_v_m_s": baseline.airspeed_m_s,
+        "v_difference_m_s": data_speed - baseline.airspeed_m_s,
+    }
+
+
+def aligned_on_input(runs: Sequence[FlightRun], arrays: Sequence[np.ndarray]) -> np.ndarray:
     """``arrays`` (one (N_i, channels) array per run) aligned at each run's input start on their
     common span: shape (runs, samples, channels).
     """
@@ -163,7 +174,7 @@ def input_locked_fraction(runs: Sequence[FlightRun], normalised: Sequence[np.nda
     Noise and disturbances give about 0 (R ~ 1/M); an error the input drives the same way every
     time gives 1. Runs are aligned at their input start on their common span.
     """
-    aligned = _aligned_on_input(runs, normalised)
+    aligned = aligned_on_input(runs, normalised)
     count = len(aligned)
     ratio = np.sum(aligned.mean(axis=0) ** 2) / np.mean(np.sum(aligned**2, axis=(1, 2)))
     return float((ratio - 1.0 / count) / (1.0 - 1.0 / count))
@@ -176,15 +187,16 @@ def unlocked_residual_sd(runs: Sequence[FlightRun], residuals: Sequence[np.ndarr
     over M runs is scaled by M / (M - 1). NaN for a channel when fewer than two runs are given.
     """
     if len(runs) < 2:
-        return np.full(len(CHANNELS), np.nan)
-    aligned = _aligned_on_input(runs, residuals)
+        return np.full(residuals[0].shape[1], np.nan)
+    aligned = aligned_on_input(runs, residuals)
     count = len(aligned)
     spread = aligned - aligned.mean(axis=0)
     return np.sqrt(np.mean(spread**2, axis=(0, 1)) * count / (count - 1))
 
 
-def flight_summary(where: dict[str, object]) -> list[str]:
-    """Sentences stating, with numbers, where the gap concentrates."""
+def flight_summary(where: dict[str, object], input_name: str = "elevator") -> list[str]:
+    """Sentences stating, with numbers, where the gap concentrates (``input_name``: the input
+    that excites the runs)."""
     channels = where["by_channel"]
     channel = max(channels, key=lambda name: channels[name]["energy_share"])
     bands = where["by_band"]
@@ -198,47 +210,43 @@ def flight_summary(where: dict[str, object]) -> list[str]:
         f"normalised residual energy (RMS {channels[channel]['rms']:.3g} "
         f"{channels[channel]['unit']})",
         f"frequency: {band['band_hz'][0]:g}-{band['band_hz'][1]:.3g} Hz holds "
-        f"{100 * band['pooled_share']:.0f} % of it; coherence with the elevator there "
+        f"{100 * band['pooled_share']:.0f} % of it; coherence with the {input_name} there "
         f"{np.mean(list(band['coherence_with_input'].values())):.2f} (channel mean)",
         f"time: the {segment.replace('_', ' ')} segment is "
         f"{segments[segment]['relative_intensity']:.1f}x the mean residual intensity "
         f"({100 * segments[segment]['energy_share']:.0f} % of the energy)",
-        f"steady state: data - model theta {steady['theta_difference_deg']:+.2f} deg, "
+        "steady state: none (the runs are segments of a record)"
+        if steady is None
+        else f"steady state: data - model theta {steady['theta_difference_deg']:+.2f} deg, "
         f"V {steady['v_difference_m_s']:+.3f} m/s",
         "residual-input correlation (max over lags): "
-        + ", ".join(f"{c} {correlations[c].get('elevator', 0.0):.2f}" for c in correlations)
+        + ", ".join(f"{c} {correlations[c].get(input_name, 0.0):.2f}" for c in correlations)
         + f" (99 % bound {where['residual_tests']['bound']:.3f})",
     ]
     return lines
 
 
-def sparse_pointer(
-    runs: Sequence[FlightRun], residuals: Sequence[np.ndarray], baseline: LinearFlightModel
-) -> dict[str, object]:
-    """Sparse regression of each state's equation residual dx/dt - (A x + B u) on features."""
+def sparse_pointer(runs: Sequence[FlightRun], baseline: LinearFlightModel) -> dict[str, object]:
+    """Sparse regression of each state's equation residual dx/dt - (A x + B u) on features: the
+    measured states, the exciting input and its rate, time, q|q| (when a state is named q) and 1."""
+    states = baseline.state_names
+    input_name = baseline.input_names[runs[0].excitation_index]
+    names = [*states, input_name, f"{input_name}_rate", "time"]
+    names += ["q_abs_q"] if "q" in states else []
+    names.append("one")
     targets, features = [], []
     for run in runs:
         step = run.time_step_s
         rates = np.gradient(run.states, step, axis=0)
-        model_rates = run.states @ baseline.a_matrix.T + run.elevator_rad[:, None] @ (
-            baseline.b_matrix.T
-        )
-        targets.append(rates - model_rates)
-        q = run.states[:, 0]
-        features.append(
-            np.column_stack(
-                [
-                    run.states,
-                    run.elevator_rad,
-                    np.gradient(run.elevator_rad, step),
-                    run.time_s,
-                    q * np.abs(q),
-                    np.ones(len(q)),
-                ]
-            )
-        )
+        targets.append(rates - run.states @ baseline.a_matrix.T - run.inputs @ baseline.b_matrix.T)
+        columns = [run.states, run.excitation, np.gradient(run.excitation, step), run.time_s]
+        if "q" in states:
+            q = run.states[:, states.index("q")]
+            columns.append(q * np.abs(q))
+        columns.append(np.ones(len(run.time_s)))
+        features.append(np.column_stack(columns))
     target, feature = np.concatenate(targets), np.concatenate(features)
     return {
-        f"d{channel}_dt": sparse_terms(feature, target[:, index], POINTER_FEATURES)
-        for index, channel in enumerate(CHANNELS)
+        f"d{state}_dt": sparse_terms(feature, target[:, index], tuple(names))
+        for index, state in enumerate(states)
     }

@@ -1,33 +1,52 @@
-"""The linear flight model a diagnosis compares with the data, and its response on a manoeuvre.
+"""The linear flight model a diagnosis compares with the data, and its response on a run.
 
-States [q (rad/s), u, w (m/s), theta (rad)] as deviations from trim, input elevator (rad), in the
-body frame of docs/frames.md; dx/dt = A x + B delta_e, outputs = states. The response on a
-manoeuvre starts from the measured first sample and is driven by the measured elevator (held
-between samples as the model says, first-order by default: :mod:`ornitail.flight.discretisation`),
-optionally delayed by ``delay_s`` and with a measured-theta drift ``theta_drift_rad_s``
-(rad/s) counted from the run-in's middle (the run-in mean is what the deviations are taken from).
+dx/dt = A x + B u, y = C x + D u in the model's own states, inputs and outputs (SI, or the units
+its model file's ``[columns]`` scale the log to); the DelFly simulator's model has states and
+outputs [q (rad/s), u, w (m/s), theta (rad)] (body frame of docs/frames.md) and input elevator
+(rad). The response on a run starts from the run's measured initial state and is driven by the
+logged inputs (held between samples as the model says, first-order by default:
+:mod:`ornitail.flight.discretisation`), each changed by the model's measurement augmentations:
+
+- ``delays_s[j]`` (s): input j acts that long after it is logged (u_true(t) = u_log(t - d));
+- ``filters_s[j]`` (s): input j is logged through a first-order low-pass of that time constant,
+  so the input that acts is u_true = u_log + tau du_log/dt (the filter inverted). The derivative
+  is not formed where it would be integrated: with T = diag(tau), z = x - B T u_log obeys
+  dz/dt = A z + (B + A B T) u_log, and x = z + B T u_log; only a feed-through D T du_log/dt
+  (an output that reads the input directly) uses the sampled derivative;
+- ``output_biases[i]`` (output i's unit): output i is measured with that constant offset;
+- ``output_drifts[i]`` (output i's unit per s): output i is measured with a drift counted from
+  the middle of the run-in before the input (the run-in mean is what deviations are taken from).
+
+An output measured by the same data column as a state (same name) carries its bias and drift into
+the measured initial state, which is corrected before the motion starts.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
+from functools import lru_cache
 
 import numpy as np
 
 from ornitail.flight.discretisation import numeric_hold
 from ornitail.flight.linear_simulation import next_inputs, propagate
-from ornitail.gap.flight_data import FlightRun
+from ornitail.gap.flight_data import SIMULATOR_CHANNELS, FlightRun
+
+
+def _zeros(count: int) -> tuple[float, ...]:
+    return (0.0,) * count
 
 
 @dataclass(frozen=True)
 class LinearFlightModel:
-    """A, B of the longitudinal model (SI), the pitch inertia it uses and its trim.
+    """A, B, C, D of the model, its names, the pitch inertia it uses and its trim.
 
-    ``iyy_kg_m2`` converts a pitch-damping change (N m s/rad) into A; NaN when the model file does
-    not declare it. ``theta0_rad`` and ``airspeed_m_s`` are the model's steady state (NaN when
-    unknown). ``delay_s`` and ``theta_drift_rad_s`` are measurement augmentations (zero for a
-    plain model).
+    ``iyy_kg_m2`` is NaN when the model does not declare it; ``theta0_rad`` and ``airspeed_m_s``
+    are the model's steady state (NaN when unknown). ``c_matrix``/``d_matrix`` None mean C = I,
+    D = 0. ``dynamic_rows`` are the state equations with free coefficients (the detection rule's
+    random directions act there; a kinematic row such as theta' = q is left alone). The
+    augmentation tuples (see the module docstring) are empty for a plain model (all zero).
     """
 
     a_matrix: np.ndarray
@@ -35,55 +54,162 @@ class LinearFlightModel:
     iyy_kg_m2: float
     theta0_rad: float
     airspeed_m_s: float
-    delay_s: float = 0.0
-    theta_drift_rad_s: float = 0.0
     input_hold: str = "first_order"
+    c_matrix: np.ndarray | None = None
+    d_matrix: np.ndarray | None = None
+    state_names: tuple[str, ...] = SIMULATOR_CHANNELS
+    input_names: tuple[str, ...] = ("elevator",)
+    output_names: tuple[str, ...] = SIMULATOR_CHANNELS
+    dynamic_rows: tuple[int, ...] = (0, 1, 2)
+    delays_s: tuple[float, ...] = field(default=())
+    filters_s: tuple[float, ...] = field(default=())
+    output_biases: tuple[float, ...] = field(default=())
+    output_drifts: tuple[float, ...] = field(default=())
 
     def with_matrices(self, a_matrix: np.ndarray, b_matrix: np.ndarray) -> LinearFlightModel:
         return replace(self, a_matrix=a_matrix, b_matrix=b_matrix)
+
+    def with_input_change(
+        self, index: int, delay_s: float = 0.0, filter_s: float = 0.0
+    ) -> LinearFlightModel:
+        """This model with input ``index`` delayed by ``delay_s`` and/or filtered by ``filter_s``."""
+        delays = list(self.delays_s or _zeros(len(self.input_names)))
+        filters = list(self.filters_s or _zeros(len(self.input_names)))
+        delays[index] += delay_s
+        filters[index] += filter_s
+        return replace(self, delays_s=tuple(delays), filters_s=tuple(filters))
+
+    def with_output_change(
+        self, index: int, bias: float = 0.0, drift_per_s: float = 0.0
+    ) -> LinearFlightModel:
+        """This model with output ``index`` measured with ``bias`` and/or ``drift_per_s`` more."""
+        biases = list(self.output_biases or _zeros(len(self.output_names)))
+        drifts = list(self.output_drifts or _zeros(len(self.output_names)))
+        biases[index] += bias
+        drifts[index] += drift_per_s
+        return replace(self, output_biases=tuple(biases), output_drifts=tuple(drifts))
+
+    @property
+    def c(self) -> np.ndarray:
+        """C (outputs x states)."""
+        return np.eye(len(self.a_matrix)) if self.c_matrix is None else self.c_matrix
+
+    @property
+    def d(self) -> np.ndarray:
+        """D (outputs x inputs)."""
+        if self.d_matrix is None:
+            return np.zeros((len(self.output_names), self.b_matrix.shape[1]))
+        return self.d_matrix
+
+
+def _add(
+    first: tuple[float, ...], second: tuple[float, ...], base: tuple[float, ...], count: int
+) -> tuple[float, ...]:
+    """first + second - base of augmentation tuples (empty = ``count`` zeros)."""
+
+    def full(values: tuple[float, ...]) -> np.ndarray:
+        return np.asarray(values or _zeros(count), dtype=float)
+
+    return tuple(float(v) for v in full(first) + full(second) - full(base))
 
 
 def superpose(
     baseline: LinearFlightModel, first: LinearFlightModel, second: LinearFlightModel
 ) -> LinearFlightModel:
-    """Both changes from ``baseline`` at once: A, B, delay and drift changes added."""
+    """Both changes from ``baseline`` at once: matrices and augmentations added."""
+    inputs, outputs = len(baseline.input_names), len(baseline.output_names)
     return replace(
         first,
         a_matrix=first.a_matrix + second.a_matrix - baseline.a_matrix,
         b_matrix=first.b_matrix + second.b_matrix - baseline.b_matrix,
-        delay_s=first.delay_s + second.delay_s - baseline.delay_s,
-        theta_drift_rad_s=first.theta_drift_rad_s
-        + second.theta_drift_rad_s
-        - baseline.theta_drift_rad_s,
+        c_matrix=None if baseline.c_matrix is None else first.c + second.c - baseline.c,
+        d_matrix=None if baseline.d_matrix is None else first.d + second.d - baseline.d,
+        delays_s=_add(first.delays_s, second.delays_s, baseline.delays_s, inputs),
+        filters_s=_add(first.filters_s, second.filters_s, baseline.filters_s, inputs),
+        output_biases=_add(
+            first.output_biases, second.output_biases, baseline.output_biases, outputs
+        ),
+        output_drifts=_add(
+            first.output_drifts, second.output_drifts, baseline.output_drifts, outputs
+        ),
     )
 
 
+def _filter_matrix(model: LinearFlightModel) -> np.ndarray:
+    """B T, T = diag(filter time constants) (zero without filters)."""
+    return model.b_matrix * np.asarray(model.filters_s or _zeros(len(model.input_names)))
+
+
+@lru_cache(maxsize=64)
+def _hold(
+    a_bytes: bytes, b_bytes: bytes, shape: tuple[int, int], step_s: float, input_hold: str
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`numeric_hold` of A, B given as bytes: the candidates that change only the inputs or
+    the outputs (delays, biases, drifts) re-use the baseline's discretisation."""
+    a_matrix = np.frombuffer(a_bytes).reshape(shape[0], shape[0])
+    b_matrix = np.frombuffer(b_bytes).reshape(shape)
+    return numeric_hold(a_matrix, b_matrix, step_s, input_hold)
+
+
 def simulate_runs(model: LinearFlightModel, runs: Sequence[FlightRun]) -> list[np.ndarray]:
-    """Predicted states (N, 4) of ``model`` on each manoeuvre (see the module docstring)."""
-    holds: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
-    predictions = []
-    for run in runs:
-        step = round(run.time_step_s, 12)
-        if step not in holds:
-            holds[step] = numeric_hold(
-                model.a_matrix, model.b_matrix, run.time_step_s, model.input_hold
-            )
-        predictions.append(_simulate(model, run, *holds[step]))
-    return predictions
+    """Predicted measured outputs (N, outputs) of ``model`` on each run (module docstring)."""
+    a_matrix = np.ascontiguousarray(model.a_matrix, dtype=float)
+    driving = np.ascontiguousarray(
+        model.b_matrix + model.a_matrix @ _filter_matrix(model), dtype=float
+    )
+    return [
+        _simulate(
+            model,
+            run,
+            *_hold(
+                a_matrix.tobytes(),
+                driving.tobytes(),
+                driving.shape,
+                round(run.time_step_s, 12),
+                model.input_hold,
+            ),
+        )
+        for run in runs
+    ]
+
+
+def delayed_inputs(model: LinearFlightModel, run: FlightRun) -> np.ndarray:
+    """The logged inputs (N, inputs) delayed by the model's delays (from the samples logged
+    before the run where it has them, else held at its first)."""
+    inputs = run.inputs
+    if not any(model.delays_s):
+        return inputs
+    inputs = inputs.copy()
+    before = run.inputs_before if run.inputs_before is not None else run.inputs[:0]
+    times = np.concatenate([(np.arange(-len(before), 0)) * run.time_step_s, run.time_s])
+    logged = np.concatenate([before, run.inputs])
+    for index, delay in enumerate(model.delays_s):
+        if delay != 0.0:
+            inputs[:, index] = np.interp(run.time_s - delay, times, logged[:, index])
+    return inputs
 
 
 def _simulate(
     model: LinearFlightModel, run: FlightRun, ad: np.ndarray, bd: np.ndarray, bd_next: np.ndarray
 ) -> np.ndarray:
-    elevator = run.elevator_rad
-    if model.delay_s != 0.0:
-        elevator = np.interp(run.time_s - model.delay_s, run.time_s, run.elevator_rad)
-    start = run.states[0].copy()
-    drift = model.theta_drift_rad_s * (run.time_s - 0.5 * run.input_start_s)
-    start[3] -= drift[0]  # the measured first theta holds the drift; the motion starts without it
-    inputs = elevator[:, None]
-    predicted = propagate(ad, inputs @ bd.T + next_inputs(inputs) @ bd_next.T, start)
-    predicted[:, 3] += drift
+    inputs = delayed_inputs(model, run)
+    filtered = _filter_matrix(model)
+    outputs = len(model.output_names)
+    biases = np.asarray(model.output_biases or _zeros(outputs))
+    drifts = np.asarray(model.output_drifts or _zeros(outputs))
+    offsets = biases[None, :] + drifts[None, :] * (run.time_s - 0.5 * run.input_start_s)[:, None]
+    start = run.initial_state.copy()
+    for index, name in enumerate(model.output_names):
+        if name in model.state_names:  # the measured start holds the sensor's offset
+            start[model.state_names.index(name)] -= offsets[0, index]
+    start -= filtered @ inputs[0]
+    states = propagate(ad, inputs @ bd.T + next_inputs(inputs) @ bd_next.T, start)
+    states += inputs @ filtered.T
+    acting = inputs
+    if any(model.filters_s):
+        rates = np.gradient(inputs, run.time_step_s, axis=0)
+        acting = inputs + rates * np.asarray(model.filters_s)
+    predicted = states @ model.c.T + acting @ model.d.T + offsets
     if not np.all(np.isfinite(predicted)):
         return np.full_like(predicted, 1e6)
     return predicted

@@ -8,17 +8,23 @@ x_h_mm = 98                     # tail position, mm
 effects_off = ["added_mass"]    # simulator effects the baseline leaves out
 # model = "delfly_longitudinal" # linear_model: preset or flight model file (its start values)
 # candidates = ["added_mass", "input_delay"]   # optional: restrict the library
+# segment_s = 1.0               # linear_model: cut logs into segments of this many seconds
+# derivative_refit = true       # linear_model: also re-fit the model's own derivatives
 ```
+
+``tail`` and ``x_h_mm`` are required for the simulator and optional for a model file (they then
+only label the report).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import read_toml_file
-from ornitail.core.toml_table import TomlTable
+from ornitail.core.toml_table import REQUIRED, TomlTable
 from ornitail.flight.model_file import load_model
 from ornitail.sim.effects import EFFECT_NAMES
 from ornitail.vehicle.geometry import require_tail_position_mm, study_tail_geometry
@@ -31,12 +37,14 @@ class BaselineSpec:
     """What the diagnosis compares the data with (see the module docstring)."""
 
     kind: str
-    tail: str
-    x_h_mm: float
+    tail: str = ""
+    x_h_mm: float = math.nan
     effects_off: tuple[str, ...] = ()
     model: str = ""
     candidates: tuple[str, ...] = ()
     source: str = "baseline"
+    segment_s: float | None = None  # linear_model: logs cut into segments of this length (s)
+    derivative_refit: bool = False  # linear_model: re-fit the model's derivatives too
 
 
 def _names(table: TomlTable, key: str, known: tuple[str, ...] | None) -> tuple[str, ...]:
@@ -65,13 +73,30 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
         path,
         "baseline",
         document.get("baseline"),
-        ("kind", "tail", "x_h_mm", "effects_off", "model", "candidates"),
+        (
+            "kind",
+            "tail",
+            "x_h_mm",
+            "effects_off",
+            "model",
+            "candidates",
+            "segment_s",
+            "derivative_refit",
+        ),
     )
     kind = table.text("kind", choices=BASELINE_KINDS)
-    x_h_mm = table.number("x_h_mm", positive=True)
-    require_tail_position_mm(table.where("x_h_mm"), x_h_mm)
-    tail = table.text("tail")
-    study_tail_geometry(tail, where=table.where("tail"))
+    optional = None if kind == "linear_model" else REQUIRED
+    x_h_mm = table.number("x_h_mm", optional, positive=True)
+    if x_h_mm is not None:
+        require_tail_position_mm(table.where("x_h_mm"), x_h_mm)
+    tail = table.text("tail", optional)
+    if tail is not None:
+        study_tail_geometry(tail, where=table.where("tail"))
+    segment_s = table.number("segment_s", None, positive=True)
+    refit = table.boolean("derivative_refit", False)
+    for key, given in (("segment_s", segment_s is not None), ("derivative_refit", refit)):
+        if given and kind != "linear_model":
+            raise UserInputError(table.where(key), "only for kind = linear_model (a model file)")
     model = ""
     if kind == "linear_model":
         model = table.text("model")
@@ -81,8 +106,10 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
         load_model(model)  # a missing, unreadable or malformed model is refused here, by name
     return BaselineSpec(
         kind=kind,
-        tail=tail,
-        x_h_mm=x_h_mm,
+        tail=tail or "",
+        x_h_mm=math.nan if x_h_mm is None else x_h_mm,
+        segment_s=segment_s,
+        derivative_refit=refit,
         effects_off=_names(table, "effects_off", EFFECT_NAMES),
         model=model,
         candidates=_names(table, "candidates", None),
@@ -92,13 +119,16 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
 
 def write_baseline_spec(spec: BaselineSpec, path: str | Path) -> Path:
     """Write ``spec`` as a baseline-model file (the inverse of :func:`read_baseline_spec`)."""
-    lines = [
-        "[baseline]",
-        f'kind = "{spec.kind}"',
-        f'tail = "{spec.tail}"',
-        f"x_h_mm = {spec.x_h_mm:g}",
-        "effects_off = [" + ", ".join(f'"{name}"' for name in spec.effects_off) + "]",
-    ]
+    lines = ["[baseline]", f'kind = "{spec.kind}"']
+    if spec.tail:
+        lines.append(f'tail = "{spec.tail}"')
+    if math.isfinite(spec.x_h_mm):
+        lines.append(f"x_h_mm = {spec.x_h_mm:g}")
+    lines.append("effects_off = [" + ", ".join(f'"{name}"' for name in spec.effects_off) + "]")
+    if spec.segment_s is not None:
+        lines.append(f"segment_s = {spec.segment_s:g}")
+    if spec.derivative_refit:
+        lines.append("derivative_refit = true")
     if spec.model:
         lines.append(f'model = "{spec.model}"')
     if spec.candidates:

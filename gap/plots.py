@@ -185,13 +185,19 @@ def steady_residual_picture(
     return _save(figure, folder, "residuals_by_configuration")
 
 
-FLIGHT_OVERLAY_CHANNELS = (
-    ("q", "pitch rate q (deg/s)", 180.0 / np.pi),
-    ("u", "body velocity u (m/s)", 1.0),
-    ("w", "body velocity w (m/s)", 1.0),
-    ("theta", "pitch attitude theta (deg)", 180.0 / np.pi),
-)
-"""Channel, axis label and the factor from SI (rad/s, m/s, rad) to the label's unit."""
+FLIGHT_OVERLAY_CHANNELS = {
+    "q": ("pitch rate q (deg/s)", 180.0 / np.pi),
+    "u": ("body velocity u (m/s)", 1.0),
+    "w": ("body velocity w (m/s)", 1.0),
+    "theta": ("pitch attitude theta (deg)", 180.0 / np.pi),
+}
+"""The simulator's channels: axis label and the factor from SI (rad/s, m/s, rad) to its unit."""
+
+
+def _overlay_axis(channel: str, simulator_units: bool) -> tuple[str, float]:
+    if simulator_units and channel in FLIGHT_OVERLAY_CHANNELS:
+        return FLIGHT_OVERLAY_CHANNELS[channel]
+    return f"{channel} (model unit)", 1.0
 
 
 def flight_overlay_figure(
@@ -201,16 +207,18 @@ def flight_overlay_figure(
     corrected: np.ndarray,
     label: str,
     effect: str,
+    channels: Sequence[str] = tuple(FLIGHT_OVERLAY_CHANNELS),
 ) -> plt.Figure:
-    """One manoeuvre over time (s): measured states, the baseline's prediction and the prediction
-    with ``effect`` (corrected), one panel per channel of :data:`FLIGHT_OVERLAY_CHANNELS`; the arrays
-    are (N, 4) in SI (rad/s, m/s, m/s, rad), deviations from the run-in steady state."""
+    """One run over time (s): measured outputs, the baseline's prediction and the prediction with
+    ``effect`` (corrected), one panel per output in ``channels``; the arrays are (N, outputs) in
+    the model's units (the simulator's four states in SI, shown in deg/s, m/s and deg), deviations
+    from the run-in for a manoeuvre."""
+    simulator_units = tuple(channels) == tuple(FLIGHT_OVERLAY_CHANNELS)
     figure, axes = plt.subplots(
-        len(FLIGHT_OVERLAY_CHANNELS), 1, figsize=(8, 8), sharex=True, squeeze=False
+        len(channels), 1, figsize=(8, 2 * len(channels)), sharex=True, squeeze=False
     )
-    for index, (axis, (_, name, factor)) in enumerate(
-        zip(axes[:, 0], FLIGHT_OVERLAY_CHANNELS, strict=True)
-    ):
+    for index, (axis, channel) in enumerate(zip(axes[:, 0], channels, strict=True)):
+        name, factor = _overlay_axis(channel, simulator_units)
         axis.plot(time_s, measured[:, index] * factor, color="0.3", linewidth=1.2, label="data")
         axis.plot(time_s, baseline[:, index] * factor, color="tab:blue", label="baseline")
         axis.plot(
@@ -223,11 +231,8 @@ def flight_overlay_figure(
         axis.set_ylabel(name, fontsize=8)
         axis.grid(True, alpha=0.3)
     axes[0, 0].legend(fontsize=7, loc="best")
-    axes[-1, 0].set_xlabel("time from the manoeuvre's start (s)")
-    figure.suptitle(
-        f"manoeuvre {label}: data, baseline and corrected model (deviations from the run-in)",
-        fontsize=10,
-    )
+    axes[-1, 0].set_xlabel("time from the run's start (s)")
+    figure.suptitle(f"run {label}: data, baseline and corrected model", fontsize=10)
     figure.tight_layout()
     return figure
 
@@ -240,7 +245,8 @@ def flight_overlay_picture(
     label: str,
     effect: str,
     folder: Path,
+    channels: Sequence[str] = tuple(FLIGHT_OVERLAY_CHANNELS),
 ) -> list[str]:
     """Write ``flight_overlay.png/.pdf`` (:func:`flight_overlay_figure`); return the paths."""
-    figure = flight_overlay_figure(time_s, measured, baseline, corrected, label, effect)
+    figure = flight_overlay_figure(time_s, measured, baseline, corrected, label, effect, channels)
     return _save(figure, folder, "flight_overlay")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -62,8 +63,9 @@ def assemble_report(
         "data_kind": kind,
         "baseline": {
             "kind": spec.kind,
-            "tail": spec.tail,
-            "x_h_mm": spec.x_h_mm,
+            "tail": spec.tail or None,
+            "x_h_mm": spec.x_h_mm if math.isfinite(spec.x_h_mm) else None,
+            "segment_s": spec.segment_s,
             "effects_off": list(spec.effects_off),
             "model": spec.model or None,
             "source": spec.source,

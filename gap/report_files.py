@@ -10,7 +10,6 @@ import numpy as np
 
 from ornitail.core.errors import UserInputError
 from ornitail.core.output import to_jsonable
-from ornitail.gap.flight_data import CHANNELS
 from ornitail.gap.flight_diagnosis import FlightDiagnosis, diagnose_flight, residuals_of
 from ornitail.gap.model_spec import read_baseline_spec
 from ornitail.gap.plots import (
@@ -28,12 +27,13 @@ from ornitail.gap.tunnel_diagnosis import diagnose_tunnel
 
 def _flight_pictures(diagnosis: FlightDiagnosis, folder: Path) -> list[str]:
     effect = diagnosis.report["best_candidate"]
+    channels = diagnosis.baseline.output_names
     before = residuals_of(diagnosis.baseline, diagnosis.runs)
     written = residual_spectra_picture(
         [r / diagnosis.scales for r in before],
         [r / diagnosis.scales for r in diagnosis.after_residuals],
         diagnosis.runs[0].time_step_s,
-        CHANNELS,
+        channels,
         effect,
         folder,
     )
@@ -44,12 +44,13 @@ def _flight_pictures(diagnosis: FlightDiagnosis, folder: Path) -> list[str]:
     choices = diagnosis.report.get("split", {}).get("test_choices") or {}
     written += flight_overlay_picture(
         run.time_s,
-        run.states,
-        run.states - before[worst],
-        run.states - diagnosis.after_residuals[worst],
+        run.outputs,
+        run.outputs - before[worst],
+        run.outputs - diagnosis.after_residuals[worst],
         run.label,
         "the effect its fold chose" if len(choices) > 1 else str(effect),
         folder,
+        channels,
     )
     return written
 

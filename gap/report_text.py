@@ -22,6 +22,27 @@ def magnitude_text(magnitude: dict[str, Any]) -> str:
     return f"{prefix}{magnitude['value']:.4g} {magnitude['unit']}{edge}"
 
 
+def _refit_lines(refit: dict[str, Any] | None) -> list[str]:
+    """The derivative re-fit (docs/gap-diagnosis.md, Method step 7) as text; none when not asked."""
+    if not refit:
+        return []
+    if refit["derivatives"] is None:
+        return [f"derivative re-fit: none ({refit['reason']})"]
+    low, high = refit["closure_interval"]
+    lines = [
+        f"derivative re-fit ({refit['method']}, {refit['training_runs']} training runs; the most a "
+        f"linear re-fit closes on test runs: {refit['closure_test']:.3f} [{low:.3f}, {high:.3f}]):"
+    ]
+    for name, item in refit["derivatives"].items():
+        low, high = item["change_interval"]
+        mark = "*" if item["moved"] else " "
+        lines.append(
+            f" {mark}{name:10s} {item['baseline']:+.4g} -> {item['refit']:+.4g} {item['unit']} "
+            f"(change [{low:+.3g}, {high:+.3g}])"
+        )
+    return lines
+
+
 def render_report(report: dict[str, Any]) -> str:
     """Readable summary: verdict, where, ranking, how far the gap shrinks, the sparse pointer."""
     runs = report["runs"]
@@ -69,6 +90,8 @@ def render_report(report: dict[str, Any]) -> str:
             f"{magnitude_text({'value': entry['magnitude'], 'unit': entry['unit'], 'at_bound': entry['at_bound']})}"
             f"  P(best) {entry['probability_best']:.2f}"
         )
+    for name, reason in (report.get("candidates_skipped") or {}).items():
+        lines.append(f"  skipped {name}: {reason}")
     closure = report["closure"]
     low, high = closure["interval"]
     lines.append(
@@ -82,6 +105,7 @@ def render_report(report: dict[str, Any]) -> str:
         f"runs {closure['realised_test']:.3f} [{low:.3f}, {high:.3f}] (interval over test runs, "
         "conditional on the chosen effect)"
     )
+    lines += _refit_lines(report.get("derivative_refit"))
     pointer = report["sparse_regression"]
     lines.append("sparse regression of the residual (pointer):")
     for target, fit in pointer.items():

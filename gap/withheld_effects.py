@@ -12,17 +12,20 @@ off. Effects and their magnitude ``k`` (the unit the diagnosis reports it in):
 | ``cg_shift_with_x_h`` | simulator effect on (needs x_h != 98 mm) | 1 |
 | ``pitch_damping`` | wing pitch-damping coefficient times ``1 + factor`` | change of M_q, N m s/rad |
 | ``input_delay`` | logged ``elevator_rad`` leads the true deflection by k | s |
+| ``input_filter`` | logged ``elevator_rad`` is the deflection through a first-order low-pass of time constant k | s |
 | ``theta_drift`` | logged ``theta_rad`` drifts by k per second of log time | rad/s |
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
+from scipy.signal import lfilter
 
 from ornitail.core.errors import UserInputError
 from ornitail.gap.model_spec import BaselineSpec
@@ -37,7 +40,13 @@ SWITCHED_EFFECTS = (
     "wake_profile",
     "cg_shift_with_x_h",
 )
-WITHHELD_EFFECTS = (*SWITCHED_EFFECTS, "pitch_damping", "input_delay", "theta_drift")
+WITHHELD_EFFECTS = (
+    *SWITCHED_EFFECTS,
+    "pitch_damping",
+    "input_delay",
+    "input_filter",
+    "theta_drift",
+)
 _MAGNITUDE_PARAMETERS = {"added_mass": "coefficient", "flapping_frequency_coupling": "gain"}
 
 
@@ -111,6 +120,17 @@ def true_magnitudes(case: WithheldCase) -> dict[str, float]:
     return magnitudes
 
 
+def first_order_lowpass(values: np.ndarray, step_s: float, time_constant_s: float) -> np.ndarray:
+    """``values`` (uniformly sampled every ``step_s`` s) through tau dy/dt + y = x, tau =
+    ``time_constant_s``, starting at rest at the first value; exact for a signal linear between
+    samples (the first-order hold the models use)."""
+    ratio = time_constant_s / step_s
+    pole = math.exp(-1.0 / ratio)
+    now, before = 1.0 - ratio * (1.0 - pole), ratio * (1.0 - pole) - pole
+    values = np.asarray(values, dtype=float)
+    return lfilter([now, before], [1.0, -pole], values - values[0]) + values[0]
+
+
 def simulate_withheld_log(case: WithheldCase) -> pd.DataFrame:
     """A flight log (docs/flight-campaign.md columns) with the case's withheld effects active."""
     check_effects(case.effects)
@@ -130,6 +150,12 @@ def simulate_withheld_log(case: WithheldCase) -> pd.DataFrame:
     if "input_delay" in case.effects:
         delay = case.effects["input_delay"]
         log["elevator_rad"] = np.interp(time_s + delay, time_s, log["elevator_rad"].to_numpy(float))
+    if "input_filter" in case.effects:
+        log["elevator_rad"] = first_order_lowpass(
+            log["elevator_rad"].to_numpy(float),
+            float(np.median(np.diff(time_s))),
+            case.effects["input_filter"],
+        )
     if "theta_drift" in case.effects:
         log["theta_rad"] = log["theta_rad"] + case.effects["theta_drift"] * time_s
     return log

@@ -13,9 +13,10 @@ from ornitail.gap.flight_model import LinearFlightModel, simulate_runs
 from ornitail.gap.model_spec import BaselineSpec
 
 
-def _run(elevator: np.ndarray, step: float = 1 / 64) -> FlightRun:
+def _run(elevator: np.ndarray, step: float = 1 / 64, start_s: float = 0.5) -> FlightRun:
     time_s = np.arange(len(elevator)) * step
-    return FlightRun("t#1", time_s, np.zeros((len(elevator), 4)), elevator, 0.5, 0.3, 0.7)
+    states = np.zeros((len(elevator), 4))
+    return FlightRun("t#1", time_s, states, elevator[:, None], states, states[0], start_s, 0.3, 0.7)
 
 
 def _integrator() -> LinearFlightModel:
@@ -29,7 +30,7 @@ def _integrator() -> LinearFlightModel:
 def test_zero_order_hold_integrates_a_step_exactly():
     elevator = np.where(np.arange(200) >= 40, 0.1, 0.0)
     run = _run(elevator)
-    held = LinearFlightModel(**{**_integrator().__dict__, "input_hold": "zero_order"})
+    held = dataclasses.replace(_integrator(), input_hold="zero_order")
     (predicted,) = simulate_runs(held, [run])
     elapsed = np.clip(run.time_s - run.time_s[40], 0.0, None)
     np.testing.assert_allclose(predicted[:, 0], 0.2 * elapsed, atol=1e-12)
@@ -52,7 +53,7 @@ def test_first_order_hold_integrates_the_sampled_step_as_a_ramp_between_samples(
 def test_delay_shifts_the_response_by_the_delay():
     elevator = np.where(np.arange(200) >= 40, 0.1, 0.0)
     run = _run(elevator)
-    delayed_model = LinearFlightModel(**{**_integrator().__dict__, "delay_s": 5 / 64})
+    delayed_model = _integrator().with_input_change(0, delay_s=5 / 64)
     (plain,) = simulate_runs(_integrator(), [run])
     (delayed,) = simulate_runs(delayed_model, [run])
     np.testing.assert_allclose(delayed[5:, 0], plain[:-5, 0], atol=1e-12)
@@ -60,7 +61,7 @@ def test_delay_shifts_the_response_by_the_delay():
 
 def test_theta_drift_adds_a_ramp_from_the_run_in_middle():
     run = _run(np.zeros(100))
-    drifting = LinearFlightModel(**{**_integrator().__dict__, "theta_drift_rad_s": 0.01})
+    drifting = _integrator().with_output_change(3, drift_per_s=0.01)
     (predicted,) = simulate_runs(drifting, [run])
     # the measured first theta (0) holds drift 0.01 * (0 - 0.25); the true attitude is 0.0025 and
     # stays (q = 0), so the measured prediction is 0.0025 + 0.01 (t - 0.25) = 0.01 t
@@ -75,15 +76,16 @@ def _doublet_runs(model: LinearFlightModel, count: int, seed: int) -> list[Fligh
     elevator = 0.05 * (
         ((time_s >= 1.0) & (time_s < 1.5)) * 1.0 - ((time_s >= 1.5) & (time_s < 2.0))
     )
+    zeros = np.zeros((384, 4))
     plain = [
-        FlightRun(f"t#{i}", time_s, np.zeros((384, 4)), elevator, 1.0, 0.3, 0.7)
+        FlightRun(f"t#{i}", time_s, zeros, elevator[:, None], zeros, zeros[0], 1.0, 0.3, 0.7)
         for i in range(count)
     ]
     responses = simulate_runs(model, plain)
     noise = 0.05 * np.concatenate(responses).std(axis=0)
     generator = np.random.default_rng(seed)
     return [
-        dataclasses.replace(run, states=response + noise * generator.standard_normal((384, 4)))
+        dataclasses.replace(run, outputs=response + noise * generator.standard_normal((384, 4)))
         for run, response in zip(plain, responses, strict=True)
     ]
 
@@ -98,7 +100,7 @@ def test_the_detection_threshold_rises_when_the_baseline_leaves_a_systematic_err
     wrong_a = truth.a_matrix.copy()
     wrong_a[0, :3] *= np.array([1.6, 0.7, 1.4])  # M_q, M_u, M_w off by tens of percent
     wrong = truth.with_matrices(wrong_a, truth.b_matrix * 1.2)
-    scales = np.concatenate([run.states for run in runs]).std(axis=0)
+    scales = np.concatenate([run.outputs for run in runs]).std(axis=0)
 
     def rule(baseline: LinearFlightModel):
         return null_rule(baseline, runs[:6], runs[6:9], scales, seed=4, draws=8)
@@ -106,3 +108,36 @@ def test_the_detection_threshold_rises_when_the_baseline_leaves_a_systematic_err
     exact, missing = rule(truth), rule(wrong)
     assert exact.null_quantile < 0.05
     assert missing.null_quantile > exact.null_quantile + 0.1
+
+
+def test_the_filter_candidate_undoes_a_logged_first_order_filter():
+    """The surface steps by 0.1 rad at 0.5 s; the log holds it through a 0.1 s first-order
+    low-pass. With the filter's time constant the model's q is the integrator's exact ramp
+    0.2 (t - 0.5); the log's exponential is held linear between samples, which leaves an error of
+    order h^2 / tau (h = 1/64 s) in q's ramp, below 1e-3 rad/s."""
+    time_s = np.arange(200) / 64.0
+    elapsed = np.clip(time_s - 0.5, 0.0, None)
+    logged = 0.1 * (1.0 - np.exp(-elapsed / 0.1))
+    run = _run(logged)
+    (plain,) = simulate_runs(_integrator(), [run])
+    (unfiltered,) = simulate_runs(_integrator().with_input_change(0, filter_s=0.1), [run])
+    np.testing.assert_allclose(unfiltered[:, 0], 0.2 * elapsed, atol=1e-3)
+    assert np.max(np.abs(plain[:, 0] - 0.2 * elapsed)) > 0.015  # the log's lag: 0.2 x 0.1 s
+
+
+def test_a_segment_delays_its_input_from_the_samples_logged_before_it():
+    """A step logged between 4 and 3 samples before the run, delayed by 5 samples, ramps in (first-
+    order hold) between the run's samples 1 and 2; a run that knows nothing before it holds its
+    first (already stepped) sample."""
+    elevator = np.full(100, 0.1)
+    with_history = dataclasses.replace(
+        _run(elevator, start_s=0.0), inputs_before=np.array([[0.0], [0.0], [0.1], [0.1], [0.1]])
+    )
+    delayed = _integrator().with_input_change(0, delay_s=5 / 64)
+    (from_history,) = simulate_runs(delayed, [with_history])
+    (held,) = simulate_runs(delayed, [_run(elevator, start_s=0.0)])
+    np.testing.assert_allclose(held[:, 0], 0.2 * np.arange(100) / 64, atol=1e-12)
+    np.testing.assert_allclose(from_history[:2, 0], 0.0, atol=1e-12)
+    np.testing.assert_allclose(
+        from_history[2:, 0], 0.2 * (np.arange(2, 100) - 1.5) / 64, atol=1e-12
+    )

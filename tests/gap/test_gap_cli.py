@@ -166,3 +166,31 @@ def test_the_example_and_the_benchmark_refuse_fewer_manoeuvres_than_a_diagnosis_
     for name in ("example", "benchmark"):
         (option,) = [p for p in gap_group.commands[name].params if p.name == "manoeuvres"]
         assert option.type.min == MINIMUM_MANOEUVRES
+
+
+TWIN_OTTER = Path(__file__).parents[1] / "data" / "twin-otter" / "twin_otter_020213f1_019.csv"
+
+
+def test_a_record_without_manoeuvre_commands_needs_a_segment_length(tmp_path):
+    model = tmp_path / "model.toml"
+    model.write_text('[baseline]\nkind = "linear_model"\nmodel = "twin_otter_short_period"\n')
+    arguments = ["gap", "diagnose", "--model", str(model), "--data", str(TWIN_OTTER)]
+    message = _one_line_error([*arguments, "--out", str(tmp_path / "report")])
+    assert "twin_otter_020213f1_019.csv" in message and "elevator_cmd" in message
+    assert "segment_s" in message
+
+
+@pytest.mark.parametrize(
+    ("text", "named"),
+    [
+        ('kind = "simulator"\ntail = "S3"\nx_h_mm = 98\nsegment_s = 1.0', "segment_s"),
+        ('kind = "linear_model"\nmodel = "twin_otter_short_period"\nsegment_s = -1', "segment_s"),
+        ('kind = "linear_model"\nmodel = "twin_otter_short_period"\nsegment_s = 0.1', "segment_s"),
+    ],
+)
+def test_a_bad_segment_length_is_one_line(tmp_path, text, named):
+    model = tmp_path / "model.toml"
+    model.write_text("[baseline]\n" + text + "\n")
+    arguments = ["gap", "diagnose", "--model", str(model), "--data", str(TWIN_OTTER)]
+    message = _one_line_error([*arguments, "--out", str(tmp_path / "report")])
+    assert named in message

@@ -61,8 +61,8 @@ def test_overlay_axes_name_quantity_and_unit_in_degrees_at_the_edge():
         "body velocity w (m/s)",
         "pitch attitude theta (deg)",
     ]
-    assert figure.axes[-1].get_xlabel() == "time from the manoeuvre's start (s)"
-    assert "manoeuvre run 1" in figure.texts[0].get_text()
+    assert figure.axes[-1].get_xlabel() == "time from the run's start (s)"
+    assert "run run 1" in figure.texts[0].get_text()
     handles = [line.get_label() for line in figure.axes[0].get_lines()]
     assert handles == ["data", "baseline", "corrected (+ added_mass)"]
 

@@ -25,6 +25,11 @@ def test_written_spec_reads_back(tmp_path):
         ('kind = "simulator"\ntail = "S3"\nx_h_mm = nan', "x_h_mm"),
         ('kind = "simulator"\ntail = "S3"\nx_h_mm = 98\ncolour = 1', "colour"),
         ('kind = "simulator"\ntail = "S3"\nx_h_mm = 98\neffects_off = "added_mass"', "effects_off"),
+        (
+            'kind = "simulator"\ntail = "S3"\nx_h_mm = 98\nderivative_refit = true',
+            "derivative_refit",
+        ),
+        ('kind = "linear_model"\nmodel = "delfly_longitudinal"\nderivative_refit = 1', "refit"),
     ],
 )
 def test_mistakes_name_the_key(tmp_path, text, where):
@@ -34,6 +39,15 @@ def test_mistakes_name_the_key(tmp_path, text, where):
         read_baseline_spec(path)
 
 
+def test_a_model_file_baseline_needs_no_configuration_and_reads_back(tmp_path):
+    spec = BaselineSpec(
+        "linear_model", model="twin_otter_short_period", segment_s=0.5, derivative_refit=True
+    )
+    again = read_baseline_spec(write_baseline_spec(spec, tmp_path / "b.toml"))
+    assert (again.tail, again.segment_s, again.derivative_refit) == ("", 0.5, True)
+    assert np.isnan(again.x_h_mm)
+
+
 def test_linear_model_baseline_uses_the_file_and_only_augmentations(tmp_path):
     spec = BaselineSpec("linear_model", "S3", 98.0, model="delfly_longitudinal")
     baseline = baseline_flight_model(spec)
@@ -41,14 +55,11 @@ def test_linear_model_baseline_uses_the_file_and_only_augmentations(tmp_path):
     expected = preset.state_space(preset.start_values(), preset.constants)
     np.testing.assert_allclose(baseline.a_matrix, expected.a_matrix)
     assert baseline.iyy_kg_m2 == pytest.approx(1.35066e-4)
-    names = {candidate.name for candidate in flight_candidates(spec, baseline)}
-    assert names == {"iyy_shift", "pitch_damping", "input_delay", "theta_drift"}
-
-
-def test_a_model_with_other_states_is_refused():
-    spec = BaselineSpec("linear_model", "S3", 98.0, model="twin_otter_short_period")
-    with pytest.raises(UserInputError, match="states q, u, w, theta"):
-        baseline_flight_model(spec)
+    library = flight_candidates(spec, baseline)
+    names = {candidate.name for candidate in library.candidates}
+    assert names == {"iyy_shift", "pitch_damping", "input_delay", "input_filter", "theta_drift"}
+    # manoeuvre deviations by default: constant sensor offsets cancel, so no bias candidates
+    assert set(library.skipped) == {"q_bias", "u_bias", "w_bias", "theta_bias"}
 
 
 def test_an_unavailable_candidate_is_named():

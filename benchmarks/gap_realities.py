@@ -1,0 +1,229 @@
+"""The gap diagnosis on three realities, scored part by part.
+
+1. ``sim``: the simulator's own flights with withheld effects (``ornitail gap benchmark``'s cases,
+   :mod:`ornitail.gap.benchmark`); every effect is in the library.
+2. ``independent``: flapper B (benchmarks/independent_reality.py), a vehicle and physics the
+   library was not written for, against its own linearisation; ``input_delay``,
+   ``input_filter`` and ``added_mass`` are in the library, ``static_stability`` and
+   ``frequency_sag`` are not.
+3. ``semi_real``: NASA's Twin Otter record with an injected effect (benchmarks/semi_real.py),
+   against the model identified on the untouched record; all injected effects are in the library.
+
+Per part: false alarms (an effect named on a no-effect case) and ``unexplained`` on no-effect
+cases; the named-in-library rate (the reported set holds the library's name of the true effect)
+with the median magnitude error of those; for out-of-library effects the rate of ``unexplained``
+or a derivative-level candidate (``pitch_damping``, ``iyy_shift``: the nearest derivative change)
+rather than a wrong measurement effect; and for named effects how often a fresh flight's closure
+(another noise and gust seed; the diagnosis' model and channel weights) lies inside the reported
+90 % interval (semi-real: one record, no fresh flight).
+
+``python benchmarks/gap_realities.py [--sim-cases 10] [--independent-cases 12] [--seed 2018]
+[--out result.json]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import independent_reality
+import numpy as np
+import semi_real
+
+from ornitail.core.output import to_jsonable
+from ornitail.gap.benchmark import draw_case as draw_sim_case
+from ornitail.gap.benchmark import run_case as run_sim_case
+from ornitail.gap.flight_diagnosis import (
+    FlightDiagnosis,
+    diagnose_flight,
+    read_record,
+    residuals_of,
+)
+from ornitail.gap.model_spec import read_baseline_spec
+
+DERIVATIVE_LEVEL = ("pitch_damping", "iyy_shift")
+SEMI_REAL_CASES = (
+    semi_real.InjectedCase(None),
+    semi_real.InjectedCase("elevator_delay", 0.04),
+    semi_real.InjectedCase("elevator_delay", 0.08),
+    semi_real.InjectedCase("elevator_filter", 0.05),
+    semi_real.InjectedCase("elevator_filter", 0.1),
+    semi_real.InjectedCase("alpha_bias", 0.25),
+    semi_real.InjectedCase("alpha_bias", 0.5),
+)
+
+
+def _outcome(
+    report: dict, expected: str | None, magnitude: float, in_library: bool
+) -> dict[str, object]:
+    """One case's scores from its report (``expected``: the library's name, None for no effect)."""
+    named = set(report["indistinguishable_set"]) if report["verdict"] == "effect" else set()
+    result: dict[str, object] = {
+        "expected": expected,
+        "in_library": in_library,
+        "verdict": report["verdict"],
+        "reported": report["effect"],
+        "reported_set": sorted(named),
+        "closure_test": report["closure"]["realised_test"],
+        "closure_interval": report["closure"]["interval"],
+    }
+    if expected is not None and expected in named and magnitude:
+        entry = next(e for e in report["ranking"] if e["name"] == expected)
+        result["magnitude_error"] = abs(entry["magnitude"] - magnitude) / abs(magnitude)
+    return result
+
+
+def _fresh_closure(diagnosis: FlightDiagnosis, spec_path: Path, log_path: Path) -> float:
+    """Closure of the diagnosis' chosen model on another flight (its own channel weights)."""
+    runs = read_record(read_baseline_spec(spec_path), [log_path]).runs
+
+    def energy(model) -> float:
+        return float(sum(np.sum((r / diagnosis.weights) ** 2) for r in residuals_of(model, runs)))
+
+    return 1.0 - float(np.sqrt(energy(diagnosis.chosen) / energy(diagnosis.baseline)))
+
+
+def _within(result: dict[str, object], fresh: float) -> None:
+    low, high = result["closure_interval"]
+    result["closure_fresh_flight"] = fresh
+    result["fresh_within_interval"] = bool(low <= fresh <= high)
+
+
+def sim_part(cases: int, seed: int, tick: Callable[[str], None]) -> list[dict[str, object]]:
+    results = []
+    for index in range(cases):
+        case = draw_sim_case(index, seed, independent_reality.MANOEUVRES)
+        with tempfile.TemporaryDirectory(prefix="ornitail-gap-") as folder:
+            scored = run_sim_case(case, Path(folder), seed)
+        truth = scored["true_effects"]
+        result = {
+            "expected": ",".join(sorted(truth)) or None,
+            "in_library": True,
+            "verdict": scored["verdict"],
+            "reported": scored["reported"],
+            "reported_set": scored["reported_set"],
+            "named_in_library": bool(scored["top1"]),
+            "closure_test": scored["closure_reported"],
+        }
+        if "magnitude_error" in scored:
+            result["magnitude_error"] = scored["magnitude_error"]
+        if "closure_fresh_flight" in scored:
+            result["closure_interval"] = scored["closure_interval"]
+            _within(result, scored["closure_fresh_flight"])
+        results.append(result)
+        tick(f"sim {index + 1}/{cases}: {result['expected']} -> {result['verdict']}")
+    return results
+
+
+def independent_part(cases: int, seed: int, tick: Callable[[str], None]) -> list[dict[str, object]]:
+    results = []
+    for index in range(cases):
+        case = independent_reality.draw_case(index, seed)
+        with tempfile.TemporaryDirectory(prefix="ornitail-gap-") as folder:
+            log_path, spec_path = independent_reality.write_case(case, Path(folder))
+            diagnosis = diagnose_flight(read_baseline_spec(spec_path), [log_path], seed=seed)
+            expected = independent_reality.IN_LIBRARY.get(case.effect)
+            result = _outcome(
+                diagnosis.report,
+                None if case.effect == "none" else expected or case.effect,
+                case.magnitude,
+                case.effect == "none" or expected is not None,
+            )
+            result["effect"], result["magnitude"] = case.effect, case.magnitude
+            if diagnosis.report["verdict"] == "effect":
+                fresh_case = type(case)(case.effect, case.magnitude, case.seed + 1)
+                fresh_log, _ = independent_reality.write_case(fresh_case, Path(folder) / "fresh")
+                _within(result, _fresh_closure(diagnosis, spec_path, fresh_log))
+        results.append(result)
+        tick(f"independent {index + 1}/{cases}: {case.effect} -> {result['verdict']}")
+    return results
+
+
+def semi_real_part(seed: int, tick: Callable[[str], None]) -> list[dict[str, object]]:
+    results = []
+    with tempfile.TemporaryDirectory(prefix="ornitail-gap-") as folder:
+        model_file = semi_real.identified_model_file(Path(folder))
+        for index, case in enumerate(SEMI_REAL_CASES):
+            log_path, spec_path = semi_real.write_case(
+                case, Path(folder) / str(index), model_file, derivative_refit=True
+            )
+            report = diagnose_flight(read_baseline_spec(spec_path), [log_path], seed=seed).report
+            expected, magnitude = case.expected
+            result = _outcome(report, expected, magnitude, True)
+            result["effect"], result["magnitude"] = case.effect, case.magnitude
+            refit = report["derivative_refit"]
+            result["refit_moved"] = refit.get("moved")
+            result["refit_closure_test"] = refit.get("closure_test")
+            results.append(result)
+            tick(
+                f"semi-real {index + 1}/{len(SEMI_REAL_CASES)}: {case.effect} -> {report['verdict']}"
+            )
+    return results
+
+
+def _rate(flags: list[bool]) -> str:
+    return f"{sum(flags)} of {len(flags)}" if flags else "-"
+
+
+def summarise(results: list[dict[str, object]]) -> dict[str, object]:
+    """The per-part scores of the module docstring."""
+    none_cases = [r for r in results if r["expected"] is None]
+    library = [r for r in results if r["expected"] is not None and r["in_library"]]
+    outside = [r for r in results if not r["in_library"]]
+    named = [r.get("named_in_library", r["expected"] in r["reported_set"]) for r in library]
+    errors = [r["magnitude_error"] for r in results if "magnitude_error" in r]
+    fresh = [r["fresh_within_interval"] for r in results if "fresh_within_interval" in r]
+    return {
+        "cases": len(results),
+        "false_alarms_on_no_effect": _rate([r["verdict"] == "effect" for r in none_cases]),
+        "unexplained_on_no_effect": _rate([r["verdict"] == "unexplained" for r in none_cases]),
+        "named_in_library": _rate(named),
+        "magnitude_error_median": float(np.median(errors)) if errors else None,
+        "magnitude_error_max": float(np.max(errors)) if errors else None,
+        "out_of_library_unexplained_or_nearest_derivative": _rate(
+            [
+                r["verdict"] == "unexplained"
+                or (r["verdict"] == "effect" and r["reported"] in DERIVATIVE_LEVEL)
+                for r in outside
+            ]
+        ),
+        "out_of_library_named_as": [r["reported"] or r["verdict"] for r in outside],
+        "fresh_flight_closure_within_reported_interval": _rate(fresh),
+    }
+
+
+def main(argv: list[str] | None = None) -> dict[str, object]:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sim-cases", type=int, default=10)
+    parser.add_argument("--independent-cases", type=int, default=12)
+    parser.add_argument("--seed", type=int, default=2018)
+    parser.add_argument("--out", type=Path)
+    arguments = parser.parse_args(argv)
+    started = time.monotonic()
+
+    def tick(what: str) -> None:
+        print(f"[{time.monotonic() - started:7.1f} s] {what}", file=sys.stderr, flush=True)
+
+    parts = {
+        "semi_real": semi_real_part(arguments.seed, tick),
+        "independent": independent_part(arguments.independent_cases, arguments.seed, tick),
+        "sim": sim_part(arguments.sim_cases, arguments.seed, tick),
+    }
+    result = {
+        "seed": arguments.seed,
+        "scores": {name: summarise(results) for name, results in parts.items()},
+        "results": parts,
+    }
+    if arguments.out:
+        arguments.out.write_text(json.dumps(to_jsonable(result), indent=1))
+    print(json.dumps(to_jsonable(result["scores"]), indent=1))
+    return result
+
+
+if __name__ == "__main__":
+    main()
