@@ -647,6 +647,20 @@ def run_sweep(
     return result
 
 
+def run_sweep_to_completion(
+    plan: SweepPlan, rig: Rig, data_root: Path, resumes: int = 3, **options: Any
+) -> SweepResult:
+    """:func:`run_sweep`, then its resume while it ends ``incomplete`` (records still lossy after their retakes:
+    a host too busy to read the link in time), at most ``resumes`` times, as a user would; the last result,
+    whose ``run_directories`` hold the whole chain. ``options`` go to every call."""
+    result = run_sweep(plan, rig, data_root, **options)
+    for _ in range(resumes):
+        if result.status != "incomplete":
+            break
+        result = run_sweep(plan, rig, data_root, resume=True, **options)
+    return result
+
+
 def _refuse_operator_action(instruction: str) -> None:
     raise UserInputError(
         "operator", f"this rig needs a person to act ({instruction}) but none was asked"

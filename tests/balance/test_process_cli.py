@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from ornitail.acquisition.sweep import run_sweep
+from ornitail.acquisition.sweep import run_sweep_to_completion
 from ornitail.acquisition.sweep_plan import plan_from_document
 from ornitail.app.cli import main
 
@@ -41,7 +41,10 @@ def cli():
 def recorded_sweep(simulated_rig, tmp_path):
     data_root = tmp_path / "data"
     data_root.mkdir()
-    result = run_sweep(plan_from_document(SHORT_PLAN, "short.toml"), simulated_rig, data_root)
+    # resumed where a busy host lost samples through a record's retakes
+    result = run_sweep_to_completion(
+        plan_from_document(SHORT_PLAN, "short.toml"), simulated_rig, data_root
+    )
     assert result.status == "completed"
     return data_root, result.run_directories
 
