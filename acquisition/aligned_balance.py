@@ -1,22 +1,30 @@
-"""A CAN balance with the ORNI-DAQ9 serial board beside it as auxiliary acquisition, aligned on the host clock.
+"""A gauge balance (ATI NETCANOEM on CAN, ATI Net F/T over UDP) with the ORNI-DAQ9 serial board beside it as
+auxiliary acquisition, aligned on the host clock. One class serves both routes: the balance is any
+:class:`~ornitail.acquisition.balance_interface.TimedGaugeBalance`, which places its own samples on the host clock.
 
-The NETCANOEM balance is polled: each gauge sample is stamped with the host time its request was sent (the board
-samples when the request arrives, one CAN frame later: 47 bit times, 47 us at 1 Mbit/s). The serial board samples
-the hot-wire bridge, the thermocouple and the Hall line on its own crystal and stamps nothing; its sample counter is
-mapped to host time by :class:`~ornitail.acquisition.aux_clock_model.CounterClockModel` (the line under the block
-arrival times). Both are thus on one clock, the host's (rig time).
+- The NETCANOEM is polled: each gauge sample is stamped with the host time its request was sent (the board samples
+  when the request arrives, one CAN frame later: 47 bit times, 47 us at 1 Mbit/s).
+- The Net F/T streams records numbered by its own sample counter (``ft_sequence``, 7000 per s of its crystal); that
+  counter is mapped to host time by a :class:`~ornitail.acquisition.aux_clock_model.CounterClockModel`, exactly as
+  the auxiliary board's.
+- The serial board samples the hot-wire bridge, the thermocouple and the Hall line on its own crystal and stamps
+  nothing; its sample counter is mapped to host time by a ``CounterClockModel`` (the line under the block arrival
+  times).
+
+All are thus on one clock, the host's (rig time).
 
 The stream's rows lie on a uniform grid of that clock, row ``k`` at ``t0 + k / rate`` (``rate``: the sweep's sample
 rate, by default the auxiliary board's), so a recording looks exactly like the single-board one (nine channels in
-``CHANNEL_NAMES`` order, consecutive counters, one sample rate) and processing reads it unchanged; the balance is
-polled at its own rate (``[balance.can].sample_rate_hz``). Rows as dense as the auxiliary board's samples keep the
-Hall edges as sharp as the single board's: cycle averaging cuts cycles at whole rows, and at the polling rate
-(0.5-1 kHz, 40-70 rows per flap) that cut alone biased the cycle means by a few mN. At each row the
-gauges are interpolated linearly between the two polls around it (over a whole flap this is the trapezoid rule
-on the polls, exact for the mean up to harmonics near the polling rate), the hot-wire and thermocouple linearly between
-the two auxiliary samples around it, and the Hall line is the auxiliary sample at or before it (its edges keep the
-auxiliary board's resolution). A row without both polls within ``MAX_POLL_GAP_PERIODS`` periods, or without its two
-auxiliary samples, is not emitted: its counter is missing, so the recording shows the loss as a counter gap.
+``CHANNEL_NAMES`` order, consecutive counters, one sample rate) and processing reads it unchanged; the balance runs
+at its own rate (``[balance.can].sample_rate_hz`` polls, ``[balance.netft].rdt_rate_hz`` records per second). Rows as
+dense as the auxiliary board's samples keep the Hall edges as sharp as the single board's: cycle averaging cuts
+cycles at whole rows, and at the balance's rate (0.5-1 kHz, 40-70 rows per flap) that cut alone biased the cycle
+means by a few mN. At each row the gauges are interpolated linearly between the two balance samples around it (over
+a whole flap this is the trapezoid rule on them, exact for the mean up to harmonics near the balance's rate), the
+hot-wire and thermocouple linearly between the two auxiliary samples around it, and the Hall line is the auxiliary
+sample at or before it (its edges keep the auxiliary board's resolution). A row without both balance samples within
+``MAX_POLL_GAP_PERIODS`` periods, or without its two auxiliary samples, is not emitted: its counter is missing, so the
+recording shows the loss as a counter gap.
 
 Each set point's journal entry gets the alignment of the auxiliary clock (:meth:`AlignedBalance.alignment_values`).
 """
@@ -30,19 +38,22 @@ from typing import Any
 
 import numpy as np
 
-from ornitail.acquisition.aux_clock_model import ClockFit, CounterClockModel
-from ornitail.acquisition.balance_interface import BalanceBlock, BalanceStream, LinkCounts
+from ornitail.acquisition.aux_clock_model import ClockFit, CounterClockModel, CounterUnwrapper
+from ornitail.acquisition.balance_interface import (
+    BalanceBlock,
+    BalanceStream,
+    LinkCounts,
+    TimedGaugeBalance,
+)
 from ornitail.acquisition.daq_protocol import CHANNEL_NAMES
 from ornitail.acquisition.instrument_errors import InstrumentError
-from ornitail.acquisition.netcanoem_balance import NetCanOemBalance
 from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
 
 MAX_POLL_GAP_PERIODS = 3.0
-"""Rows between two polls further apart than this many polling periods are lost (a missed reply or a stalled
-poller)."""
+"""Rows between two balance samples further apart than this many of the balance's periods are lost (a missed reply,
+a stalled poller, lost records)."""
 AUX_COLUMNS = slice(6, 9)
 """Hot-wire bridge, thermocouple, Hall line: the auxiliary board's columns the stream takes."""
-_WRAP = 1 << 32
 
 
 class AlignedBalance(BalanceStream):
@@ -50,32 +61,32 @@ class AlignedBalance(BalanceStream):
 
     Parameters
     ----------
-    balance : NetCanOemBalance
-        The CAN balance (its clock must be ``clock``).
+    balance : TimedGaugeBalance
+        The gauge balance, NETCANOEM or Net F/T (its clock must be ``clock``).
     aux : SerialDaqDriver
         The auxiliary ORNI-DAQ9 board (its clock must be ``clock``).
     aux_sample_rate_hz : float
         The auxiliary board's rate, samples per clock second (``[balance.aux_daq].sample_rate_hz``).
-    poll_rate_hz : float
-        The balance's polling rate, polls per clock second (``[balance.can].sample_rate_hz``).
+    balance_rate_hz : float
+        The balance's rate, samples per clock second (CAN polls, Net F/T records).
     clock : callable returning s
         The host clock both devices are stamped with (rig time).
     """
 
     def __init__(
         self,
-        balance: NetCanOemBalance,
+        balance: TimedGaugeBalance,
         aux: SerialDaqDriver,
         *,
         aux_sample_rate_hz: float,
-        poll_rate_hz: float,
+        balance_rate_hz: float,
         clock: Callable[[], float],
     ) -> None:
         self.balance = balance
         self.aux = aux
         self.name = f"{balance.name} with {aux.name}"
         self.aux_sample_rate_hz = float(aux_sample_rate_hz)
-        self.poll_rate_hz = float(poll_rate_hz)
+        self.balance_rate_hz = float(balance_rate_hz)
         self._clock = clock
         self._rate_hz = 0.0
         self._reset()
@@ -91,9 +102,7 @@ class AlignedBalance(BalanceStream):
         self._aux_counters = np.empty(0, dtype=np.int64)
         self._aux_volts = np.empty((0, 3))
         self._aux_flags = np.empty(0, dtype=bool)
-        self._aux_last: tuple[int, int] | None = (
-            None  # (raw, unwrapped) counter of the newest aux sample
-        )
+        self._aux_unwrapper = CounterUnwrapper()
 
     # -- BalanceStream ----------------------------------------------------------------------
     @property
@@ -124,15 +133,15 @@ class AlignedBalance(BalanceStream):
             self.aux.close()
 
     def start_stream(self, sample_rate_hz: float) -> float:
-        """Start the auxiliary board at its rate, then poll the balance at its rate; rows at ``sample_rate_hz``
+        """Start the auxiliary board at its rate, then the balance at its rate; rows at ``sample_rate_hz``
         (returned)."""
         self._reset()
         self._rate_hz = float(sample_rate_hz)
-        self.balance.check_sample_rate(self.poll_rate_hz)
+        self.balance.check_sample_rate(self.balance_rate_hz)
         self.aux.start_stream(self.aux_sample_rate_hz)
         try:
             self._t0 = self._clock()
-            self.balance.start_stream(self.poll_rate_hz)
+            self.balance.start_stream(self.balance_rate_hz)
         except BaseException:
             with contextlib.suppress(InstrumentError):
                 self.aux.stop_stream()
@@ -173,31 +182,29 @@ class AlignedBalance(BalanceStream):
     def read_block(self, timeout_s: float) -> BalanceBlock | None:
         """The grid rows both devices now cover (None when none after ``timeout_s``)."""
         self._take_aux_blocks()
-        gauges = self.balance.read_gauge_block(timeout_s)
+        gauges = self.balance.read_timed_gauges(timeout_s)
         if gauges is not None:
-            self._poll_times = np.concatenate((self._poll_times, gauges.host_time_s))
-            self._poll_volts = np.vstack(
-                (self._poll_volts, self.balance.gauge_volts(gauges.gauges))
-            )
+            self._poll_times = np.concatenate((self._poll_times, gauges.sample_time_s))
+            self._poll_volts = np.vstack((self._poll_volts, gauges.volts))
             self._poll_flags = np.concatenate((self._poll_flags, gauges.flagged))
         self._take_aux_blocks()
         return self._emit()
 
     def alignment_values(self) -> dict[str, float | int]:
         """The auxiliary clock's fit: rate error (ppm), latency jitter (rms, max), the envelope's sharpness and the
-        alignment bound (envelope plus the CAN request frame), s; points fitted and grid rows lost."""
+        alignment estimate (that envelope plus the balance's own timing uncertainty: the CAN request frame, or the
+        Net F/T counter line's envelope), s; points fitted, the balance's rate and grid rows lost."""
         fit = self._model.fit()
         if fit is None:
             return {}
-        request_frame_s = 47.0 / self.balance.bit_rate
         return {
             "aux_clock_rate_error_ppm": fit.rate_error_ppm,
             "aux_clock_jitter_rms_s": fit.jitter_rms_s,
             "aux_clock_jitter_max_s": fit.jitter_max_s,
             "aux_clock_envelope_s": fit.envelope_s,
-            "alignment_error_estimate_s": fit.envelope_s + request_frame_s,
+            "alignment_error_estimate_s": fit.envelope_s + self.balance.sample_time_uncertainty_s(),
             "aux_clock_points": fit.points,
-            "balance_poll_rate_hz": self.poll_rate_hz,
+            "balance_sample_rate_hz": self.balance_rate_hz,
             "aligned_rows_lost": self._rows_lost,
         }
 
@@ -210,9 +217,10 @@ class AlignedBalance(BalanceStream):
                 "sample_rate_hz": self.aux_sample_rate_hz,
             },
             "alignment": {
-                "method": "counter-to-host-time lower envelope (aux); request time stamps (balance)",
+                "method": "counter-to-host-time lower envelope (aux); "
+                f"{self.balance.timing_method} (balance)",
                 "grid": "rows at t0 + k / sample_rate_hz of the host clock",
-                "balance_poll_rate_hz": self.poll_rate_hz,
+                "balance_sample_rate_hz": self.balance_rate_hz,
             },
         }
 
@@ -231,7 +239,7 @@ class AlignedBalance(BalanceStream):
             if block is None:
                 self.aux.raise_if_failed()
                 return
-            counters = self._unwrapped(block.counters)
+            counters = self._aux_unwrapper.unwrap(block.counters)
             self._aux_counters = np.concatenate((self._aux_counters, counters))
             self._aux_volts = np.vstack((self._aux_volts, block.volts[:, AUX_COLUMNS]))
             # a clipped hot-wire or thermocouple (the board's status bit also covers its unused gauge inputs)
@@ -240,17 +248,6 @@ class AlignedBalance(BalanceStream):
             flags = ((analog <= low[6:8]) | (analog >= high[6:8])).any(axis=1)
             self._aux_flags = np.concatenate((self._aux_flags, flags))
             self._model.add(int(counters[-1]), block.host_time_s)
-
-    def _unwrapped(self, raw: np.ndarray) -> np.ndarray:
-        raw = np.asarray(raw, dtype=np.int64)
-        if self._aux_last is None:
-            last_raw, last = int(raw[0]) - 1, int(raw[0]) - 1
-        else:
-            last_raw, last = self._aux_last
-        steps = np.diff(np.concatenate(([last_raw], raw))) % _WRAP
-        unwrapped = last + np.cumsum(steps)
-        self._aux_last = (int(raw[-1]), int(unwrapped[-1]))
-        return unwrapped
 
     def _emit(self) -> BalanceBlock | None:
         fit = self._model.fit()
@@ -266,7 +263,7 @@ class AlignedBalance(BalanceStream):
             return None
         rows = np.arange(first_row, last_row + 1)
         times = self._t0 + rows * period
-        gauges, gauge_ok, gauge_flags = self._gauges_at(times, 1.0 / self.poll_rate_hz)
+        gauges, gauge_ok, gauge_flags = self._gauges_at(times, 1.0 / self.balance_rate_hz)
         aux, aux_ok, aux_flags = self._aux_at(fit.counter_at(times))
         ok = gauge_ok & aux_ok
         self._rows_lost += int(np.count_nonzero(~ok))

@@ -1,6 +1,7 @@
 """A device's sample counter mapped to host time: a straight line under the arrival times (the lower envelope).
 
-A device with its own sample clock (the ORNI-DAQ9 board beside another balance) stamps nothing; the host knows
+A device with its own sample clock (the ORNI-DAQ9 board beside another balance, the Net F/T's ``ft_sequence``) stamps
+nothing; the host knows
 only when each block arrived. Arrival = sampling time + transport latency, and the latency is never negative, so
 the sampling times lie on a line (the device's crystal: an offset and a rate a few tens of ppm off nominal) *at or
 below* every arrival. :class:`CounterClockModel` fits that line: the slope through the per-bin minima of the
@@ -9,11 +10,12 @@ every two bins, so that bins whose deliveries all stalled do not tilt it), the o
 touches the lowest arrival of the newest ``OFFSET_WINDOW_S``. What remains is the transport's fastest delivery
 (its floor), which timestamps cannot see; the spread of the lowest arrivals above the line
 (:attr:`ClockFit.envelope_s`) says how sharply the line is known. Times are in the host clock's seconds (rig time
-on a simulated rig); counters are unwrapped (int64).
+on a simulated rig); counters are unwrapped (int64, :class:`CounterUnwrapper`).
 """
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,6 +33,8 @@ so an error of the rate moves it by at most rate error x this span (100 ppm: 0.5
 MAX_RATE_ERROR_PPM = 1000.0
 """A fitted rate further off nominal than this is not a crystal's (stalled deliveries fooled the fit): the nominal
 rate is used instead."""
+COUNTER_MODULUS = 1 << 32
+"""The devices' counters are 32-bit and wrap to 0."""
 ENVELOPE_QUANTILE = 0.05
 """The envelope's sharpness is the residual this fraction of arrivals lies within."""
 
@@ -67,7 +71,8 @@ class ClockFit:
 
 
 class CounterClockModel:
-    """Arrivals of one device's blocks, and the line under them.
+    """Arrivals of one device's blocks, and the line under them (thread-safe: one thread may add while another
+    fits).
 
     Parameters
     ----------
@@ -80,16 +85,18 @@ class CounterClockModel:
         self._counters = np.empty(0, dtype=np.int64)
         self._arrivals = np.empty(0, dtype=float)
         self._fit: ClockFit | None = None
+        self._lock = threading.Lock()  # the stream's reader adds while a sweep asks for the fit
 
     def add(self, last_counter: int, arrival_s: float) -> None:
         """One block arrived at ``arrival_s``; ``last_counter`` is its last (newest) sample's unwrapped counter."""
-        self._counters = np.append(self._counters, np.int64(last_counter))
-        self._arrivals = np.append(self._arrivals, float(arrival_s))
-        window = int(WINDOW_S / self.nominal_period_s)
-        keep = self._counters >= self._counters[-1] - window
-        if not keep.all():
-            self._counters, self._arrivals = self._counters[keep], self._arrivals[keep]
-        self._fit = None
+        with self._lock:
+            self._counters = np.append(self._counters, np.int64(last_counter))
+            self._arrivals = np.append(self._arrivals, float(arrival_s))
+            window = int(WINDOW_S / self.nominal_period_s)
+            keep = self._counters >= self._counters[-1] - window
+            if not keep.all():
+                self._counters, self._arrivals = self._counters[keep], self._arrivals[keep]
+            self._fit = None
 
     @property
     def points(self) -> int:
@@ -98,9 +105,10 @@ class CounterClockModel:
 
     def fit(self) -> ClockFit | None:
         """The line under the arrivals in the window (None before the first arrival)."""
-        if self._fit is None and len(self._counters):
-            self._fit = self._fitted()
-        return self._fit
+        with self._lock:
+            if self._fit is None and len(self._counters):
+                self._fit = self._fitted()
+            return self._fit
 
     def _fitted(self) -> ClockFit:
         reference = int(self._counters[0])
@@ -143,3 +151,22 @@ def _median_slope(x: np.ndarray, y: np.ndarray) -> float:
     run = x[second] - x[first]
     valid = run > 0
     return float(np.median((y[second] - y[first])[valid] / run[valid]))
+
+
+class CounterUnwrapper:
+    """A device's 32-bit sample counters, block after block, as one increasing int64 series."""
+
+    def __init__(self) -> None:
+        self._last: tuple[int, int] | None = None  # (raw, unwrapped) counter of the newest sample
+
+    def unwrap(self, raw: np.ndarray) -> np.ndarray:
+        """(n,) raw counters (the block after the previous one) -> (n,) unwrapped int64 counters."""
+        raw = np.asarray(raw, dtype=np.int64)
+        if self._last is None:
+            last_raw, last = int(raw[0]) - 1, int(raw[0]) - 1
+        else:
+            last_raw, last = self._last
+        steps = np.diff(np.concatenate(([last_raw], raw))) % COUNTER_MODULUS
+        unwrapped = last + np.cumsum(steps)
+        self._last = (int(raw[-1]), int(unwrapped[-1]))
+        return unwrapped

@@ -114,3 +114,37 @@ class BalanceStream(ABC):
     def recording_description(self) -> dict[str, Any]:
         """What a recording stores about this stream beyond the rig file's route (empty: nothing more)."""
         return {}
+
+
+@dataclass
+class TimedGauges:
+    """Gauge samples placed on the host clock.
+
+    sample_time_s : (n,) increasing host (rig) time at which each sample was taken, s.
+    volts : (n, 6) float64 gauge volts, V. flagged : (n,) bool, a saturated gauge or the device's status.
+    """
+
+    sample_time_s: np.ndarray
+    volts: np.ndarray
+    flagged: np.ndarray
+
+
+class TimedGaugeBalance(BalanceStream):
+    """A balance that carries only the six gauges and knows when, on the host clock, each sample was taken: what
+    :class:`~ornitail.acquisition.aligned_balance.AlignedBalance` puts beside the auxiliary board (the NETCANOEM,
+    stamped by its requests; the Net F/T, placed by a clock model of its own sample counter)."""
+
+    timing_method: str
+    """How the samples are placed on the host clock, for ``run.json``."""
+
+    @abstractmethod
+    def check_sample_rate(self, sample_rate_hz: float) -> None:
+        """Refuse (``UserInputError``) a rate the device or its transport cannot deliver, samples/s."""
+
+    @abstractmethod
+    def read_timed_gauges(self, timeout_s: float) -> TimedGauges | None:
+        """The next samples with their host sampling times, or None after ``timeout_s`` (s)."""
+
+    @abstractmethod
+    def sample_time_uncertainty_s(self) -> float:
+        """How late, at most and not counting the transport's floor, a sample's host time may be, s."""

@@ -146,7 +146,7 @@ class LiveBalance:
             raise UserInputError(
                 f"{rig.description.path}: [balance].route",
                 "the live view streams the Hall line and hot-wire with the balance; use route = "
-                '"serial_daq", or add the serial board beside the CAN balance as [balance.aux_daq]',
+                '"serial_daq", or add the serial board beside the CAN or Net F/T balance as [balance.aux_daq]',
             )
         self.rig = rig
         self.driver: BalanceStream = rig.balance

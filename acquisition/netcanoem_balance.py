@@ -15,10 +15,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from ornitail.acquisition.balance_interface import BalanceBlock, BalanceStream, LinkCounts
+from ornitail.acquisition import netcanoem_protocol as protocol
+from ornitail.acquisition.balance_interface import (
+    BalanceBlock,
+    LinkCounts,
+    TimedGaugeBalance,
+    TimedGauges,
+)
 from ornitail.acquisition.daq_protocol import CHANNEL_NAMES
 from ornitail.acquisition.instrument_errors import InstrumentReplyError
-from ornitail.acquisition.netcanoem_driver import GaugeBlock, NetCanOemDriver
+from ornitail.acquisition.netcanoem_driver import NetCanOemDriver
 
 CALIBRATION_MATCH_TOLERANCE = 1e-3
 """Largest relative spread of (board matrix / .cal matrix) over the elements that matter: the board stores its
@@ -41,7 +47,7 @@ def volts_per_gauge_count(
     return ratio
 
 
-class NetCanOemBalance(NetCanOemDriver, BalanceStream):
+class NetCanOemBalance(NetCanOemDriver, TimedGaugeBalance):
     """A NETCANOEM board polled at the stream's rate; blocks hold the six gauges in volts.
 
     Parameters
@@ -50,6 +56,8 @@ class NetCanOemBalance(NetCanOemDriver, BalanceStream):
         The ``.cal`` file's matrix, N and N m per gauge volt (``AtiCalibration.matrix_si``).
     Other keyword arguments are :class:`NetCanOemDriver`'s.
     """
+
+    timing_method = "request time stamps"
 
     def __init__(self, *, calibration_matrix_si: np.ndarray, **driver_arguments) -> None:
         self._blocks_dropped_count = 0
@@ -122,9 +130,16 @@ class NetCanOemBalance(NetCanOemDriver, BalanceStream):
             raise RuntimeError(f"{self.name}: open() before reading gauges in volts")
         return np.asarray(gauges, dtype=float) * self.volts_per_count
 
-    def read_gauge_block(self, timeout_s: float) -> GaugeBlock | None:
-        """The next polled block as the driver gives it (per-sample request times), or None after ``timeout_s``."""
-        return self.get_block(timeout_s=timeout_s)
+    def read_timed_gauges(self, timeout_s: float) -> TimedGauges | None:
+        """The next polled samples in volts, each at the time its request was sent (None after ``timeout_s``)."""
+        block = self.get_block(timeout_s=timeout_s)
+        if block is None:
+            return None
+        return TimedGauges(block.host_time_s, self.gauge_volts(block.gauges), block.flagged)
+
+    def sample_time_uncertainty_s(self) -> float:
+        """The board samples when the request frame has arrived: one DLC-0 frame after its stamp, s."""
+        return protocol.classic_can_frame_bits(0, worst_case_stuffing=False) / self.bit_rate
 
     def read_block(self, timeout_s: float) -> BalanceBlock | None:
         """The next polled samples as gauge volts, counted in the order they were polled."""

@@ -32,6 +32,7 @@ import threading
 import time
 import urllib.error
 import urllib.request
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Self
@@ -41,7 +42,7 @@ import numpy as np
 from ornitail.acquisition import netft_protocol as protocol
 from ornitail.acquisition.instrument_errors import InstrumentDisconnected, InstrumentReplyError
 from ornitail.core.errors import UserInputError
-from ornitail.core.toml_table import TomlTable
+from ornitail.core.toml_table import REQUIRED, TomlTable
 
 RECEIVE_BUFFER_BYTES = 4 * 1024 * 1024
 """Requested kernel receive buffer (the OS caps it at net.core.rmem_max): room for bursts, bytes."""
@@ -52,7 +53,7 @@ STOP_DRAIN_LIMIT_S = 1.0
 """After stop(), records still arriving are read for at most this long, s."""
 MAX_DATAGRAM_BYTES = 65536
 SCALING_KEYS = ("counts_per_force", "counts_per_torque", "force_unit", "torque_unit")
-RIG_TABLE_KEYS = ("host", "rdt_port", "http_port", *SCALING_KEYS)
+RIG_TABLE_KEYS = ("host", "rdt_port", "http_port", "rdt_rate_hz", *SCALING_KEYS)
 
 
 @dataclass
@@ -61,8 +62,9 @@ class WrenchBlock:
 
     rdt_sequence : (n,) uint32 record counters (1 for a request's first record). ft_sequence : (n,)
     uint32 device sample counters (7000 per s). status : (n,) uint32 system status (0 = healthy).
-    wrench : (n, 6) float64 Fx Fy Fz in N and Tx Ty Tz in N m, sensor frame. host_time_s :
-    ``time.monotonic()`` when the block's last datagram arrived (arrival, not sampling, time).
+    wrench : (n, 6) float64 Fx Fy Fz in N and Tx Ty Tz in N m, sensor frame. host_time_s : the driver's
+    ``clock`` (by default ``time.monotonic()``) when the block's last datagram arrived (arrival, not sampling,
+    time), s.
     """
 
     rdt_sequence: np.ndarray
@@ -77,13 +79,14 @@ class NetFtLinkHealth:
     """Counts since streaming started and the age of the last datagram.
 
     records_received, lost_records (gaps in ``rdt_sequence``), malformed_datagrams (not a whole number of
-    36-byte records), status_flagged_records (non-zero status), blocks_dropped (full queue);
+    36-byte records) and their bytes, status_flagged_records (non-zero status), blocks_dropped (full queue);
     seconds_since_last_datagram : s, None before the first.
     """
 
     records_received: int
     lost_records: int
     malformed_datagrams: int
+    malformed_bytes: int
     status_flagged_records: int
     blocks_dropped: int
     seconds_since_last_datagram: float | None
@@ -109,7 +112,9 @@ class NetFtDriver:
     silence_limit_s : float
         A stream silent this long is a disconnection, s.
     block_period_s : float
-        About how often a block is delivered, s.
+        About how often a block is delivered, s (wall clock).
+    clock : callable returning s
+        What blocks are stamped with (``WrenchBlock.host_time_s``): the monotonic clock, or a rig's clock.
     """
 
     def __init__(
@@ -124,6 +129,7 @@ class NetFtDriver:
         silence_limit_s: float = 2.0,
         block_period_s: float = 0.01,
         queue_blocks: int = 2000,
+        clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.host = host
         self.rdt_port = int(rdt_port)
@@ -137,13 +143,26 @@ class NetFtDriver:
         self.records_received = 0
         self.lost_records = 0
         self.malformed_datagrams = 0
+        self.malformed_bytes = 0
         self.status_flagged_records = 0
         self.blocks_dropped = 0
+        self.clock = clock
         self._last_datagram_s: float | None = None
         self._socket: socket.socket | None = None
         self._receiver: threading.Thread | None = None
         self._stop_receiving = threading.Event()
         self._failure: Exception | None = None
+
+    @classmethod
+    def from_settings(cls, settings: NetFtSettings, **options: Any) -> NetFtDriver:
+        """A driver for the device a rig file's ``[balance.netft]`` names; ``options`` as the constructor's."""
+        return cls(
+            settings.host,
+            rdt_port=settings.rdt_port,
+            http_port=settings.http_port,
+            counts_per_unit=settings.counts_per_unit,
+            **options,
+        )
 
     @property
     def address(self) -> str:
@@ -188,7 +207,19 @@ class NetFtDriver:
             raise InstrumentReplyError(self.name, f"{url}: {error}") from None
 
     def _check_device_answers(self) -> None:
-        """Ask for one record and wait for it (the device numbers it 1)."""
+        """Ask for one record and wait for it."""
+        self.read_record()
+
+    def read_record(self) -> protocol.RdtRecords:
+        """Request one record (start streaming, sample count 1) and return it (not while streaming).
+
+        Raises
+        ------
+        InstrumentDisconnected
+            No record within ``reply_timeout_s`` or the port refused.
+        """
+        if self._receiver is not None:
+            raise RuntimeError(f"{self.name}: read_record() while streaming")
         self._send(protocol.COMMAND_START_REALTIME_STREAMING, sample_count=1)
         deadline = time.monotonic() + self.reply_timeout_s
         while True:
@@ -201,7 +232,7 @@ class NetFtDriver:
                 )
             datagram = self._receive(remaining)
             if datagram and len(datagram) % protocol.RECORD_LENGTH == 0:
-                return
+                return protocol.decode_records(datagram[-protocol.RECORD_LENGTH :])
 
     def close(self) -> None:
         """Stop streaming if needed and close the socket; safe to call twice or after a failure."""
@@ -259,6 +290,7 @@ class NetFtDriver:
             raise RuntimeError(f"{self.name}: already streaming")
         self._drain()
         self.records_received = self.lost_records = self.malformed_datagrams = 0
+        self.malformed_bytes = 0
         self.status_flagged_records = self.blocks_dropped = 0
         self._failure = None
         self._stop_receiving.clear()
@@ -301,6 +333,7 @@ class NetFtDriver:
             records_received=self.records_received,
             lost_records=self.lost_records,
             malformed_datagrams=self.malformed_datagrams,
+            malformed_bytes=self.malformed_bytes,
             status_flagged_records=self.status_flagged_records,
             blocks_dropped=self.blocks_dropped,
             seconds_since_last_datagram=None if last is None else time.monotonic() - last,
@@ -330,6 +363,7 @@ class NetFtDriver:
                     self._last_datagram_s = now
                     if len(datagram) % protocol.RECORD_LENGTH or not datagram:
                         self.malformed_datagrams += 1
+                        self.malformed_bytes += len(datagram)
                     else:
                         pending += datagram
                 elif now - (self._last_datagram_s or started_s) > self.silence_limit_s:
@@ -338,14 +372,14 @@ class NetFtDriver:
                         f"no RDT record from UDP {self.address} for {self.silence_limit_s:g} s",
                     )
                 if pending and now - last_block_s >= self.block_period_s:
-                    previous_sequence = self._deliver(pending, previous_sequence, now)
+                    previous_sequence = self._deliver(pending, previous_sequence, self.clock())
                     pending = bytearray()
                     last_block_s = now
             if pending:
-                self._deliver(pending, previous_sequence, time.monotonic())
+                self._deliver(pending, previous_sequence, self.clock())
         except InstrumentDisconnected as error:
             if pending:
-                self._deliver(pending, previous_sequence, time.monotonic())
+                self._deliver(pending, previous_sequence, self.clock())
             self._failure = error
             with contextlib.suppress(queue.Full):
                 self.blocks.put_nowait(None)
@@ -377,21 +411,47 @@ def _reason(error: BaseException) -> str:
     return str(reason).splitlines()[0] if str(reason) else type(error).__name__
 
 
-def driver_from_rig_table(
-    path: Path | str, table: dict[str, Any], *, name: str = "Net F/T balance"
-) -> NetFtDriver:
-    """A driver from a rig file's ``[balance.netft]`` table (see docs/instrument-protocols.md).
+@dataclass(frozen=True)
+class NetFtSettings:
+    """``[balance.netft]``: the device's address, RDT and web ports, the RDT output rate it is set to (records/s)
+    and its counts per unit (None: read from the device's ``netftapi2.xml`` on open)."""
 
-    Keys: ``host`` (required), ``rdt_port`` (49152), ``http_port`` (80) and either all four of
-    ``counts_per_force``, ``counts_per_torque``, ``force_unit``, ``torque_unit`` (the device's configuration
-    page shows them) or none, to read them from the device's ``netftapi2.xml`` on open. UserInputError
-    naming the file and key for a mistake.
+    host: str
+    rdt_port: int
+    http_port: int
+    rdt_rate_hz: float
+    counts_per_unit: protocol.CountsPerUnit | None
+
+
+def rdt_rate_problem(rate_hz: float) -> str | None:
+    """Why ``rate_hz`` cannot be an RDT output rate (7000 records/s divided by a whole number), or None."""
+    ratio = protocol.INTERNAL_SAMPLE_RATE_HZ / rate_hz if rate_hz > 0 else 0.0
+    if ratio >= 1 and abs(ratio - round(ratio)) < 1e-9 * ratio:
+        return None
+    return (
+        f"{rate_hz:g} records/s is not an RDT output rate: "
+        f"{protocol.INTERNAL_SAMPLE_RATE_HZ:g} divided by a whole number (7000, 3500, 1000, ...)"
+    )
+
+
+def netft_settings_from_table(
+    path: Path | str, table: dict[str, Any], *, simulated: bool = False
+) -> NetFtSettings:
+    """A rig file's ``[balance.netft]`` table, checked (see docs/rig-file.md).
+
+    Keys: ``host`` (required unless ``simulated``: the simulator's loopback address is used), ``rdt_port``
+    (49152), ``http_port`` (80), ``rdt_rate_hz`` (required: the RDT output rate set on the device's
+    communication page, checked against the records' ``ft_sequence`` steps when streaming) and either all four
+    of ``counts_per_force``, ``counts_per_torque``, ``force_unit``, ``torque_unit`` (the device's configuration
+    page shows them) or none, to read them from the device's ``netftapi2.xml`` on open. UserInputError naming
+    the file and key for a mistake.
     """
     fields = TomlTable(path, "balance.netft", table, RIG_TABLE_KEYS)
-    given = [key for key in SCALING_KEYS if key in table]
+    host = fields.text("host", "127.0.0.1" if simulated else REQUIRED)
+    given = [key for key in SCALING_KEYS if key in fields.table]
     scaling = None
     if given:
-        missing = [key for key in SCALING_KEYS if key not in table]
+        missing = [key for key in SCALING_KEYS if key not in fields.table]
         if missing:
             raise UserInputError(
                 fields.where(missing[0]),
@@ -410,10 +470,14 @@ def driver_from_rig_table(
             fields.text("force_unit"),
             fields.text("torque_unit"),
         )
-    return NetFtDriver(
-        fields.text("host"),
+    rdt_rate_hz = fields.number("rdt_rate_hz", positive=True)
+    problem = rdt_rate_problem(rdt_rate_hz)
+    if problem is not None:
+        raise UserInputError(fields.where("rdt_rate_hz"), problem)
+    return NetFtSettings(
+        host=host,
         rdt_port=fields.integer("rdt_port", protocol.RDT_PORT, minimum=1, maximum=65535),
         http_port=fields.integer("http_port", 80, minimum=1, maximum=65535),
+        rdt_rate_hz=rdt_rate_hz,
         counts_per_unit=scaling,
-        name=name,
     )

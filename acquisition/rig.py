@@ -165,7 +165,8 @@ class Rig:
     ) -> tuple[TunnelFan, FlappingMotor, PitchStrut, BalanceStream]:
         """Create (not open) the fan, motor, strut and balance drivers on the rig file's ports, or on the
         simulators' ptys and virtual CAN channel once :meth:`start_simulation` started them; they become
-        :attr:`fan`, :attr:`motor`, :attr:`strut` and :attr:`balance`, which :meth:`close` makes safe and closes.
+        :attr:`fan`, :attr:`motor`, :attr:`strut` and :attr:`balance`, which :meth:`close` makes safe and closes
+        (the simulated Net F/T's loopback address replaces ``[balance.netft]``'s).
         Each actuator is built by the backend its rig-file section names (:mod:`actuator_backends`)."""
         description = self.description
         ports = {
@@ -176,6 +177,7 @@ class Rig:
             "aux_daq": description.aux_daq.port if description.aux_daq else "",
         }
         can_interface, can_channel = description.can.interface, description.can.channel
+        netft = description.netft
         if self.simulators is not None:
             simulators = self.simulators
             ports.update(simulators.actuator_ports())
@@ -184,6 +186,13 @@ class Rig:
             if simulators.aux_daq_board is not None:
                 ports["aux_daq"] = simulators.aux_daq_board.port_path
             can_interface, can_channel = "virtual", simulators.can_channel or can_channel
+            if simulators.netft is not None and netft is not None:
+                netft = dataclasses.replace(
+                    netft,
+                    host=simulators.netft.host,
+                    rdt_port=simulators.netft.rdt_port,
+                    http_port=simulators.netft.http_port,
+                )
         simulated = description.simulated or description.simulator_control is not None
         reply_timeout_s = SIMULATED_REPLY_TIMEOUT_S if simulated else REPLY_TIMEOUT_S
 
@@ -217,6 +226,7 @@ class Rig:
                 reply_timeout_s=reply_timeout_s,
                 clock=self.now_s,
                 time_scale=self._time_scale,
+                netft=netft,
             )
         )
         return self.fan, self.motor, self.strut, self.balance

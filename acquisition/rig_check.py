@@ -21,6 +21,7 @@ from serial.tools import list_ports
 
 from ornitail.acquisition.actuator_interfaces import Actuator
 from ornitail.acquisition.aligned_balance import AlignedBalance
+from ornitail.acquisition.balance_interface import BalanceStream
 from ornitail.acquisition.daq_protocol import CHANNEL_NAMES
 from ornitail.acquisition.instrument_errors import (
     InstrumentDisconnected,
@@ -28,6 +29,7 @@ from ornitail.acquisition.instrument_errors import (
     InstrumentInUse,
 )
 from ornitail.acquisition.netcanoem_driver import NetCanOemDriver
+from ornitail.acquisition.netft_balance import NetFtBalance
 from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
 
@@ -185,16 +187,16 @@ def _check_instruments(rig: Rig) -> list[InstrumentCheck]:
         balance_checks = [_check_daq_board(balance, description.serial_daq.sample_rate_hz)]
     elif isinstance(
         balance, AlignedBalance
-    ):  # a CAN balance and the serial board beside it: one row each
+    ):  # a gauge balance and the board beside it: one row each
         assert description.aux_daq is not None
         balance_checks = [
-            _check_netcanoem(balance.balance),
+            _check_gauge_balance(balance.balance),
             _check_daq_board(
                 balance.aux, description.aux_daq.sample_rate_hz, "[balance.aux_daq].port"
             ),
         ]
     else:
-        balance_checks = [_check_netcanoem(balance)]
+        balance_checks = [_check_gauge_balance(balance)]
     return [
         *balance_checks,
         _check_actuator(fan, "[fan].port"),
@@ -296,6 +298,41 @@ def _first_daq_sample(board: SerialDaqDriver, sample_rate_hz: float) -> Reading:
     raise InstrumentDisconnected(
         board.name, f"no sample within {FIRST_SAMPLE_TIMEOUT_S:g} s after START on {board.port}"
     )
+
+
+def _check_gauge_balance(balance: BalanceStream) -> InstrumentCheck:
+    """The row of a gauge-only balance: the NETCANOEM or the Net F/T."""
+    if isinstance(balance, NetFtBalance):
+        return _check_netft(balance)
+    assert isinstance(balance, NetCanOemDriver)
+    return _check_netcanoem(balance)
+
+
+def _check_netft(device: NetFtBalance) -> InstrumentCheck:
+    """Counts per unit (rig file or ``netftapi2.xml``) and one RDT record (the driver's open), one more record in
+    N and N m, close (it is never left streaming)."""
+    key = "[balance.netft]"
+    route = f"udp:{device.address}"
+    try:
+        identity = device.open()
+    except InstrumentError as error:
+        return _refused(route, key, device.name, error)
+    try:
+        record = device.read_record()
+    except InstrumentError as error:
+        return InstrumentCheck(
+            device.name, key, route, STATUS_FAILED, identity, problem=error.problem
+        )
+    finally:
+        device.close()
+    assert device.counts_per_unit is not None
+    wrench = device.counts_per_unit.to_si(record.counts)[0]
+    names = ("fx_n", "fy_n", "fz_n", "tx_n_m", "ty_n_m", "tz_n_m")
+    reading: Reading = {"status_word": int(record.status[0])}
+    reading.update(
+        {name: round(float(value), 6) for name, value in zip(names, wrench, strict=True)}
+    )
+    return InstrumentCheck(device.name, key, route, STATUS_OK, identity, reading)
 
 
 def _check_netcanoem(board: NetCanOemDriver) -> InstrumentCheck:

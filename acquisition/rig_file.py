@@ -16,6 +16,8 @@ from ornitail.acquisition.actuator_backends import DEFAULT_BACKEND, backend_clas
 from ornitail.acquisition.actuator_interfaces import Actuator
 from ornitail.acquisition.daq_protocol import DEFAULT_BAUD, link_ceiling_frames_per_s
 from ornitail.acquisition.netcanoem_protocol import DEFAULT_BASE_ID, gauge_sample_rate_ceiling_hz
+from ornitail.acquisition.netft_driver import NetFtSettings, netft_settings_from_table
+from ornitail.acquisition.netft_protocol import INTERNAL_SAMPLE_RATE_HZ
 from ornitail.calibration.tool_transform import ToolTransform
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import read_toml_file
@@ -24,10 +26,8 @@ from ornitail.vehicle.constants import DELFLY_GEAR_RATIO
 
 DEFAULT_RIG_FILE = Path(__file__).parent / "data" / "simulated_rig.toml"
 BALANCE_ROUTES = ("serial_daq", "can", "netft")
-NOT_YET_ROUTES = {
-    "netft": "ATI Net F/T (UDP RDT): its driver and simulator exist, as a rig's balance not yet",
-}
-"""Routes the rig file names but the rig cannot use yet; refused with one line saying "not yet"."""
+GAUGE_ONLY_ROUTES = ("can", "netft")
+"""Balances that carry only the gauges: the auxiliary board (``[balance.aux_daq]``) may stand beside them."""
 MIN_BAUD = 1200
 """Slowest serial line rate accepted, bit/s."""
 MAX_BAUD = 12_000_000
@@ -35,7 +35,15 @@ MAX_BAUD = 12_000_000
 
 _ALLOWED_KEYS = {
     "rig": {"name", "simulated", "time_scale", "seed", "simulator_control"},
-    "balance": {"route", "calibration", "tool_transform_mm_deg", "serial_daq", "can", "aux_daq"},
+    "balance": {
+        "route",
+        "calibration",
+        "tool_transform_mm_deg",
+        "serial_daq",
+        "can",
+        "netft",
+        "aux_daq",
+    },
     "balance.serial_daq": {"port", "baud", "sample_rate_hz"},
     "balance.aux_daq": {"port", "baud", "sample_rate_hz"},
     "balance.can": {"interface", "channel", "bit_rate", "base_id", "sample_rate_hz"},
@@ -116,29 +124,38 @@ class RigDescription:
     simulator_control: Path | None = None
     """Control socket of simulated instruments served by another process (``rig_simulator_server``), or None."""
     aux_daq: SerialDaqSettings | None = None
-    """``[balance.aux_daq]``: the ORNI-DAQ9 board as auxiliary acquisition beside a CAN balance, or None."""
+    """``[balance.aux_daq]``: the ORNI-DAQ9 board as auxiliary acquisition beside a CAN or Net F/T balance, or
+    None."""
+    netft: NetFtSettings | None = None
+    """``[balance.netft]``: the Net F/T's address, ports, RDT rate and scaling (route ``netft``), else None."""
 
     @property
     def carries_flap_channels(self) -> bool:
         """True when the balance stream holds the Hall line, hot-wire and thermocouple (what a sweep records):
-        the ORNI-DAQ9 balance, or a CAN balance with ``[balance.aux_daq]``."""
+        the ORNI-DAQ9 balance, or a CAN or Net F/T balance with ``[balance.aux_daq]``."""
         return self.balance_route == "serial_daq" or self.aux_daq is not None
 
     def balance_sample_rate_hz(self) -> float:
         """The rate of the balance stream's rows the rig file sets, samples/s: the ORNI-DAQ9's, the auxiliary
-        board's beside a CAN balance (rows on its grid, the balance polled at ``[balance.can]``'s rate), or the
-        CAN polling rate alone."""
+        board's beside a CAN or Net F/T balance (rows on its grid, the balance at its own rate), or the CAN
+        polling rate or the Net F/T's RDT rate alone."""
         if self.balance_route == "serial_daq":
             return self.serial_daq.sample_rate_hz
-        return self.can.sample_rate_hz if self.aux_daq is None else self.aux_daq.sample_rate_hz
+        if self.aux_daq is not None:
+            return self.aux_daq.sample_rate_hz
+        if self.netft is not None:
+            return self.netft.rdt_rate_hz
+        return self.can.sample_rate_hz
 
     def balance_sample_rate_ceiling_hz(self) -> float:
         """The highest row rate of the balance stream: the serial line's frames/s of the board that carries the
-        Hall line, or the CAN polling ceiling for a CAN balance alone."""
+        Hall line, or for a balance alone the CAN polling ceiling or the Net F/T's 7000 records/s."""
         if self.balance_route == "serial_daq":
             return link_ceiling_frames_per_s(self.serial_daq.baud)
         if self.aux_daq is not None:
             return link_ceiling_frames_per_s(self.aux_daq.baud)
+        if self.netft is not None:
+            return INTERNAL_SAMPLE_RATE_HZ
         return gauge_sample_rate_ceiling_hz(self.can.bit_rate, worst_case_stuffing=False)
 
 
@@ -192,13 +209,14 @@ def _actuator(
 def _aux_daq(
     path: Path, balance: TomlTable, route: str, simulated: bool
 ) -> SerialDaqSettings | None:
-    """``[balance.aux_daq]``: the serial board beside a CAN balance (None when absent)."""
+    """``[balance.aux_daq]``: the serial board beside a CAN or Net F/T balance (None when absent)."""
     if "aux_daq" not in balance.table:
         return None
-    if route != "can":
+    if route not in GAUGE_ONLY_ROUTES:
         raise UserInputError(
             f"{path}: [balance.aux_daq]",
-            f"only beside a CAN balance; route {route!r} carries the Hall line, hot-wire and thermocouple itself",
+            f"only beside a CAN or Net F/T balance; route {route!r} carries the Hall line, hot-wire and "
+            "thermocouple itself",
         )
     aux = _fields(path, "balance.aux_daq", balance.table["aux_daq"])
     settings = SerialDaqSettings(
@@ -231,10 +249,6 @@ def read_rig_file(path: str | Path) -> RigDescription:
     rig = _fields(path, "rig", document["rig"])
     balance = _fields(path, "balance", document["balance"])
     route = balance.text("route", choices=BALANCE_ROUTES)
-    if route in NOT_YET_ROUTES:
-        raise UserInputError(
-            balance.where("route"), f"{route!r}: not yet ({NOT_YET_ROUTES[route]})"
-        )
     simulated = rig.boolean("simulated", False)
     simulator_control = None
     if "simulator_control" in rig.table:
@@ -247,14 +261,15 @@ def read_rig_file(path: str | Path) -> RigDescription:
     daq = _fields(path, "balance.serial_daq", balance.table.get("serial_daq", {}))
     can = _fields(path, "balance.can", balance.table.get("can", {}))
     needs_daq = route == "serial_daq"
+    needs_can = route == "can"
     serial_daq = SerialDaqSettings(
         port=daq.text("port", "simulated" if simulated or not needs_daq else REQUIRED),
         baud=daq.integer("baud", DEFAULT_BAUD, minimum=MIN_BAUD, maximum=MAX_BAUD),
         sample_rate_hz=daq.number("sample_rate_hz", 10_000.0, positive=True),
     )
     can_settings = CanSettings(
-        interface=can.text("interface", "virtual" if simulated or needs_daq else REQUIRED),
-        channel=can.text("channel", "ornitail-rig" if simulated or needs_daq else REQUIRED),
+        interface=can.text("interface", "virtual" if simulated or not needs_can else REQUIRED),
+        channel=can.text("channel", "ornitail-rig" if simulated or not needs_can else REQUIRED),
         bit_rate=can.integer("bit_rate", 1_000_000, minimum=10_000, maximum=2_000_000),
         base_id=can.integer("base_id", DEFAULT_BASE_ID, minimum=0, maximum=0x7F),
         sample_rate_hz=can.number("sample_rate_hz", 1000.0, positive=True),
@@ -266,13 +281,22 @@ def read_rig_file(path: str | Path) -> RigDescription:
             f"{link_ceiling_frames_per_s(serial_daq.baud):g} Hz at {serial_daq.baud} baud",
         )
     can_ceiling = gauge_sample_rate_ceiling_hz(can_settings.bit_rate, worst_case_stuffing=False)
-    if not needs_daq and can_settings.sample_rate_hz > can_ceiling:
+    if needs_can and can_settings.sample_rate_hz > can_ceiling:
         raise UserInputError(
             can.where("sample_rate_hz"),
             f"{can_settings.sample_rate_hz:g} samples/s exceeds the CAN ceiling {can_ceiling:.0f} "
             f"samples/s at {can_settings.bit_rate} bit/s",
         )
     aux_daq = _aux_daq(path, balance, route, simulated)
+    netft = None
+    if route == "netft":
+        if "netft" not in balance.table:
+            raise UserInputError(f"{path}: [balance.netft]", 'required with route = "netft"')
+        netft = netft_settings_from_table(path, balance.table["netft"], simulated=simulated)
+    elif "netft" in balance.table:
+        raise UserInputError(
+            f"{path}: [balance.netft]", f'only with route = "netft" (route is {route!r})'
+        )
     tunnel = _fields(path, "tunnel", document["tunnel"])
     fan, fan_settings = _actuator(path, "fan", document["fan"], simulated)
     strut, strut_settings = _actuator(path, "strut", document["strut"], simulated)
@@ -317,4 +341,5 @@ def read_rig_file(path: str | Path) -> RigDescription:
         ),
         simulator_control=simulator_control,
         aux_daq=aux_daq,
+        netft=netft,
     )

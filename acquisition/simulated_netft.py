@@ -7,9 +7,12 @@ it sends every record that is due (a burst after a late wake-up), so the average
 thread serves ``/netftapi2.xml`` with the simulator's counts per unit and units (``http.server``).
 
 Loads come from ``load_function(times_s) -> (n, 6)`` (Fx Fy Fz in N, Tx Ty Tz in N m, sensor frame) at the
-records' device times ``ft_sequence / 7000`` s; they are converted to counts with the simulator's counts per
-unit (rounded to the nearest count) less the software bias. Fault injection: ``drop_rdt_sequences`` (records
-of a continuous stream numbered so are counted but not sent), :meth:`set_status`.
+times the device took the records' samples, on ``clock`` (by default seconds since power-up, so ``ft_sequence /
+7000``); they are converted to counts with the simulator's counts per unit (rounded to the nearest count) less the
+software bias. On a simulated rig ``clock`` is the rig's simulated clock, the loads are the shared tunnel signals'
+and the device's own crystal runs ``rate_error_ppm`` off nominal (its ``ft_sequence`` is not the host's time, as on
+a real device). Fault injection: ``drop_rdt_sequences`` (records of a continuous stream numbered so are counted but
+not sent), :meth:`set_status`.
 """
 
 from __future__ import annotations
@@ -39,6 +42,11 @@ def constant_load(wrench_si: Iterable[float]) -> LoadFunction:
     return lambda times_s: np.repeat(wrench, len(times_s), axis=0)
 
 
+def _seconds_since(start_s: float) -> Callable[[], float]:
+    """A clock reading monotonic seconds since ``start_s``."""
+    return lambda: time.monotonic() - start_s
+
+
 def zero_load(times_s: np.ndarray) -> np.ndarray:
     """No load: the default load function."""
     return np.zeros((len(times_s), 6))
@@ -60,6 +68,11 @@ class SimulatedNetFt(SimulatedDevice):
     drop_rdt_sequences : iterable of int
         ``rdt_sequence`` numbers never sent in a stream until stopped (sample count 0), counted in
         :attr:`records_dropped`; a request for a given number of records is always answered whole.
+    clock : callable returning s, or None
+        The time records are paced by and loads taken at (a rig's simulated clock); None: the monotonic clock,
+        counted from power-up (construction).
+    rate_error_ppm : float
+        How much faster than 7000 samples per ``clock`` second the device's internal sampling runs, ppm.
     """
 
     def __init__(
@@ -71,6 +84,8 @@ class SimulatedNetFt(SimulatedDevice):
         rdt_port: int = 0,
         http_port: int = 0,
         drop_rdt_sequences: Iterable[int] = (),
+        clock: Callable[[], float] | None = None,
+        rate_error_ppm: float = 0.0,
     ) -> None:
         samples_per_record = protocol.INTERNAL_SAMPLE_RATE_HZ / rate_hz
         if not (rate_hz > 0 and samples_per_record >= 1 and samples_per_record.is_integer()):
@@ -88,10 +103,18 @@ class SimulatedNetFt(SimulatedDevice):
         self._status = 0
         self._bias_counts = np.zeros(6, dtype=np.int64)
         self._client: tuple[str, int] | None = None
-        self._stream_start_s = 0.0
+        self._stream_first_sample = 0  # ft_sequence of the stream's first record (unwrapped)
         self._stream_limit = 0  # records the request asked for; 0 = until stopped
         self._stream_position = 0  # records of this request generated so far (sent or dropped)
-        self._power_up_s = time.monotonic()
+        if clock is None:
+            clock, power_up_s = _seconds_since(time.monotonic()), 0.0
+        else:
+            power_up_s = clock()
+        self._clock = clock
+        self._power_up_s = power_up_s  # internal sample k is taken at power-up + k / true rate
+        self.true_internal_rate_hz = protocol.INTERNAL_SAMPLE_RATE_HZ * (
+            1.0 + rate_error_ppm * 1e-6
+        )
         self._lock = threading.Lock()
         self._udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self._udp.bind((self.host, rdt_port))  # blocking: a full send buffer waits, loses nothing
@@ -163,22 +186,24 @@ class SimulatedNetFt(SimulatedDevice):
                 protocol.COMMAND_START_BUFFERED_STREAMING,
             ):
                 self._client = sender
-                self._stream_start_s = time.monotonic()
+                elapsed_s = self._clock() - self._power_up_s
+                self._stream_first_sample = int(np.ceil(elapsed_s * self.true_internal_rate_hz))
                 self._stream_limit = sample_count
                 self._stream_position = 0
                 self.streaming = True
             elif command == protocol.COMMAND_SET_SOFTWARE_BIAS:
-                now_s = np.array([self._device_time_s(time.monotonic())])
-                loads = self.load_function(now_s)
+                loads = self.load_function(np.array([self._clock()]))
                 self._bias_counts = self.counts_per_unit.to_counts(loads)[0].astype(np.int64)
 
-    def _device_time_s(self, monotonic_s: float) -> float:
-        return monotonic_s - self._power_up_s
+    def sample_time_s(self, ft_sequence: np.ndarray) -> np.ndarray:
+        """Time on ``clock`` at which the device took the internal samples ``ft_sequence`` (unwrapped), s."""
+        return self._power_up_s + np.asarray(ft_sequence, dtype=float) / self.true_internal_rate_hz
 
     def _send_due_records(self) -> None:
-        now_s = time.monotonic()
+        elapsed_samples = (self._clock() - self._power_up_s) * self.true_internal_rate_hz
         with self._lock:
-            due = int((now_s - self._stream_start_s) * self.rate_hz) + 1
+            first_sample = self._stream_first_sample
+            due = int((elapsed_samples - first_sample) // self._samples_per_record) + 1
             if self._stream_limit:
                 due = min(due, self._stream_limit)
             first, count = self._stream_position, due - self._stream_position
@@ -189,17 +214,10 @@ class SimulatedNetFt(SimulatedDevice):
                 self.streaming = False
             client, status, bias = self._client, self._status, self._bias_counts
             drop = self._stream_limit == protocol.INFINITE_SAMPLES
-        rdt_sequence = (
-            np.arange(first, first + count, dtype=np.int64) + 1
-        ) % protocol.SEQUENCE_MODULUS
-        start_sample = int(
-            round(self._device_time_s(self._stream_start_s) * protocol.INTERNAL_SAMPLE_RATE_HZ)
-        )
-        ft_sequence = (
-            start_sample
-            + np.arange(first, first + count, dtype=np.int64) * self._samples_per_record
-        )
-        loads = self.load_function(ft_sequence / protocol.INTERNAL_SAMPLE_RATE_HZ)
+        positions = np.arange(first, first + count, dtype=np.int64)
+        rdt_sequence = (positions + 1) % protocol.SEQUENCE_MODULUS
+        ft_sequence = first_sample + positions * self._samples_per_record
+        loads = self.load_function(self.sample_time_s(ft_sequence))
         counts = np.clip(
             self.counts_per_unit.to_counts(loads).astype(np.int64) - bias, -(2**31), 2**31 - 1
         )

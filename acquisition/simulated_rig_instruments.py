@@ -1,7 +1,8 @@
 """Starts the simulated instruments a rig file names, each on a real transport (ptys, virtual CAN).
 
 All share one :class:`SimulatedClock` (so one time scale) and one :class:`SharedTunnelSignals`:
-the fan, strut and motor set its operating point, the balance board (DAQ or NETCANOEM) reads it.
+the fan, strut and motor set its operating point, the balance (DAQ board, NETCANOEM or Net F/T) reads it, so
+every balance measures the same simulated vehicle.
 Each actuator's simulator is the one of its rig-file backend: the ORNI line instruments for ``orni_line``, a Modbus
 RTU drive for ``modbus_vfd``, a Zaber ASCII controller for ``zaber_ascii``. A third-party backend has no simulator
 here: its driver is given the rig file's port.
@@ -10,7 +11,10 @@ here: its driver is given the rig file's port.
 from __future__ import annotations
 
 import uuid
+from collections.abc import Callable
 from dataclasses import dataclass
+
+import numpy as np
 
 from ornitail.acquisition.fan_speed_map import FanSpeedMap
 from ornitail.acquisition.modbus_vfd_driver import MODBUS_VFD
@@ -28,18 +32,22 @@ from ornitail.acquisition.simulated_daq_board import SimulatedDaqBoard
 from ornitail.acquisition.simulated_device import SimulatedDevice
 from ornitail.acquisition.simulated_modbus_vfd import SimulatedModbusVfd
 from ornitail.acquisition.simulated_netcanoem_board import SimulatedNetCanOemBoard
+from ornitail.acquisition.simulated_netft import SimulatedNetFt
 from ornitail.acquisition.simulated_zaber_strut import SimulatedZaberStrut
 from ornitail.acquisition.zaber_strut_driver import ZABER_ASCII
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.calibration.tunnel_table import TunnelVelocityTable
 
 SIMULATION_SAMPLE_RATE_HZ = 10_000.0
+NETFT_RATE_ERROR_PPM = -40.0
+"""The simulated Net F/T's crystal: 40 ppm slow (the auxiliary board's runs 80 ppm fast), so that aligning the two
+needs both counter models."""
 
 
 @dataclass
 class SimulatedRigInstruments:
-    """The running simulators of one rig; ``daq_board`` or ``netcanoem_board`` is None by route, an actuator's
-    simulator None when its backend has none here (a third party's)."""
+    """The running simulators of one rig; ``daq_board``, ``netcanoem_board`` or ``netft`` is None by route, an
+    actuator's simulator None when its backend has none here (a third party's)."""
 
     clock: SimulatedClock
     signals: SharedTunnelSignals
@@ -50,7 +58,9 @@ class SimulatedRigInstruments:
     netcanoem_board: SimulatedNetCanOemBoard | None
     can_channel: str | None
     aux_daq_board: SimulatedAuxDaqBoard | None = None
-    """The ORNI-DAQ9 beside the CAN balance (``[balance.aux_daq]``), on a clock of its own, else None."""
+    """The ORNI-DAQ9 beside the CAN or Net F/T balance (``[balance.aux_daq]``), on a clock of its own, else None."""
+    netft: SimulatedNetFt | None = None
+    """The Net F/T on the loopback (route ``netft``), on a crystal of its own, else None."""
 
     @classmethod
     def start(
@@ -75,7 +85,7 @@ class SimulatedRigInstruments:
                 motor = SimulatedFlappingMotor(clock, signals, gear_ratio=description.gear_ratio)
             started.append(motor)
             started = [simulator.start() for simulator in started if simulator is not None]
-            daq_board = netcanoem_board = can_channel = aux_daq_board = None
+            daq_board = netcanoem_board = can_channel = aux_daq_board = netft = None
             if description.balance_route == "serial_daq":
                 daq_board = SimulatedDaqBoard(
                     signals,
@@ -84,6 +94,14 @@ class SimulatedRigInstruments:
                     baud=description.serial_daq.baud,
                 ).start()
                 started.append(daq_board)
+            elif description.netft is not None:
+                netft = SimulatedNetFt(
+                    _loads_of(signals, calibration),
+                    rate_hz=description.netft.rdt_rate_hz,
+                    clock=clock.now_s,
+                    rate_error_ppm=NETFT_RATE_ERROR_PPM,
+                ).start()
+                started.append(netft)
             else:
                 can_channel = f"{description.can.channel}-{uuid.uuid4().hex[:8]}"
                 netcanoem_board = SimulatedNetCanOemBoard(
@@ -95,14 +113,14 @@ class SimulatedRigInstruments:
                     serial_number=calibration.serial[:8],
                 ).start()
                 started.append(netcanoem_board)
-                if description.aux_daq is not None:
-                    aux_daq_board = SimulatedAuxDaqBoard(
-                        signals,
-                        clock,
-                        sample_rate_hz=description.aux_daq.sample_rate_hz,
-                        baud=description.aux_daq.baud,
-                    ).start()
-                    started.append(aux_daq_board)
+            if description.aux_daq is not None:
+                aux_daq_board = SimulatedAuxDaqBoard(
+                    signals,
+                    clock,
+                    sample_rate_hz=description.aux_daq.sample_rate_hz,
+                    baud=description.aux_daq.baud,
+                ).start()
+                started.append(aux_daq_board)
         except BaseException:
             for simulator in reversed(started):
                 if simulator is not None:
@@ -118,6 +136,7 @@ class SimulatedRigInstruments:
             netcanoem_board,
             can_channel,
             aux_daq_board,
+            netft,
         )
 
     def actuator_ports(self) -> dict[str, str]:
@@ -127,10 +146,23 @@ class SimulatedRigInstruments:
 
     def close(self) -> None:
         """Stop every simulator."""
-        simulators = (self.aux_daq_board, self.daq_board, self.netcanoem_board)
+        simulators = (self.aux_daq_board, self.daq_board, self.netcanoem_board, self.netft)
         for simulator in (*simulators, self.motor, self.strut, self.fan):
             if simulator is not None:
                 simulator.close()
+
+
+def _loads_of(
+    signals: SharedTunnelSignals, calibration: AtiCalibration
+) -> Callable[[np.ndarray], np.ndarray]:
+    """The Net F/T's loads: the shared gauge signals at the device's sample times through the sensor's calibration
+    (N and N m in the sensor frame; the device applies its calibration to its own gauges)."""
+    matrix_si = calibration.matrix_si
+
+    def loads(times_s: np.ndarray) -> np.ndarray:
+        return signals.samples_at_times(times_s)[:, :6] @ matrix_si.T
+
+    return loads
 
 
 def _fan_simulator(

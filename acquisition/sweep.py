@@ -191,7 +191,7 @@ def check_plan_against_rig(plan: SweepPlan, rig: Rig) -> None:
         raise UserInputError(
             f"{rig.description.path}: [balance].route",
             'sweeps record the Hall line and the hot-wire with the balance; use route = "serial_daq", or add '
-            "the serial board beside the CAN balance as [balance.aux_daq]",
+            "the serial board beside the CAN or Net F/T balance as [balance.aux_daq]",
         )
 
 

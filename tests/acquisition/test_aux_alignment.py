@@ -1,5 +1,6 @@
-"""The ORNI-DAQ9 board as auxiliary acquisition beside the CAN balance: the clock model, the rig file, the aligned
-stream against the simulators' true sample times, and a short sweep that processes like the single board's."""
+"""The ORNI-DAQ9 board as auxiliary acquisition beside the CAN or Net F/T balance: the clock model, the rig file and
+the aligned stream against the simulators' true sample times (a short sweep on every backend, processed:
+test_backend_agreement.py)."""
 
 import math
 import shutil
@@ -9,23 +10,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ornitail.acquisition import set_point_recording
 from ornitail.acquisition.aligned_balance import AlignedBalance
 from ornitail.acquisition.aux_clock_model import CounterClockModel
 from ornitail.acquisition.live_balance import LiveBalance
 from ornitail.acquisition.netcanoem_balance import volts_per_gauge_count
-from ornitail.acquisition.recording_reader import load_recording
 from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, read_rig_file
-from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
-from ornitail.acquisition.sweep import run_sweep_to_completion
-from ornitail.acquisition.sweep_plan import plan_from_document
-from ornitail.balance.sweep_table import cycle_averaged_table
 from ornitail.core.errors import UserInputError
-from ornitail.sim.effects import EffectSet
 
 DATA = DEFAULT_RIG_FILE.parent
 CAN_AUX_RIG = DATA / "simulated_rig_can_aux.toml"
+NETFT_AUX_RIG = DATA / "simulated_rig_netft_aux.toml"
 DEADLINE_S = 60.0
 
 
@@ -102,13 +97,17 @@ def test_aux_board_beside_the_serial_daq_balance_is_refused(tmp_path):
     path = rig_copy(
         tmp_path, DEFAULT_RIG_FILE, {"[balance.can]": "[balance.aux_daq]\n\n[balance.can]"}
     )
-    with pytest.raises(UserInputError, match=r"\[balance.aux_daq\]: only beside a CAN balance"):
+    with pytest.raises(
+        UserInputError, match=r"\[balance.aux_daq\]: only beside a CAN or Net F/T balance"
+    ):
         read_rig_file(path)
 
 
-def test_net_ft_route_says_not_yet(tmp_path):
+def test_net_ft_route_needs_its_table(tmp_path):
     path = rig_copy(tmp_path, DEFAULT_RIG_FILE, {'route = "serial_daq"': 'route = "netft"'})
-    with pytest.raises(UserInputError, match=r"\[balance\].route: 'netft': not yet"):
+    with pytest.raises(
+        UserInputError, match=r": \[balance.netft\]: required with route = \"netft\"$"
+    ):
         read_rig_file(path)
 
 
@@ -116,13 +115,16 @@ def test_can_balance_alone_cannot_stream_the_flap_channels(tmp_path):
     path = rig_copy(tmp_path, DEFAULT_RIG_FILE, {'route = "serial_daq"': 'route = "can"'})
     with Rig.from_file(path, time_scale=5.0) as rig:
         assert not rig.description.carries_flap_channels
-        with pytest.raises(UserInputError, match=r"add the serial board beside the CAN balance"):
+        with pytest.raises(
+            UserInputError, match=r"add the serial board beside the CAN or Net F/T balance"
+        ):
             LiveBalance(rig)
 
 
 # -- the aligned stream on the simulators ---------------------------------------------------------
-def test_aligned_stream_matches_the_simulated_boards_true_sample_times(tmp_path):
-    path = rig_copy(tmp_path, CAN_AUX_RIG, {})
+@pytest.mark.parametrize("source", [CAN_AUX_RIG, NETFT_AUX_RIG], ids=["can", "netft"])
+def test_aligned_stream_matches_the_simulated_boards_true_sample_times(tmp_path, source):
+    path = rig_copy(tmp_path, source, {})
     with Rig.from_file(path, time_scale=1.0) as rig:
         balance = rig.balance
         assert isinstance(balance, AlignedBalance)
@@ -141,6 +143,15 @@ def test_aligned_stream_matches_the_simulated_boards_true_sample_times(tmp_path)
         counters = balance._aux_counters
         modelled_s = balance.time_of_aux_counter(counters)
         true_s = aux_board.sample_time_s(counters)
+        netft_error_s = None
+        if (
+            rig.simulators.netft is not None
+        ):  # the Net F/T's records are placed by a counter line too
+            stride = round(7000 / rig.description.netft.rdt_rate_hz)  # internal samples per record
+            newest = balance.balance._last_counter - stride * np.arange(2000)  # 2 s of records
+            netft_error_s = balance.balance._model.fit().time_of(
+                newest
+            ) - rig.simulators.netft.sample_time_s(newest)
         rig.stop_balance()
     rows = np.concatenate([block.counters for block in blocks]).astype(np.int64)
     volts = np.vstack([block.volts for block in blocks])
@@ -154,87 +165,24 @@ def test_aligned_stream_matches_the_simulated_boards_true_sample_times(tmp_path)
     # generous, and tiny next to what the model removes (the counter starts 123 s "early", the crystal is 80 ppm fast).
     assert error_s.min() >= -1.0 / 10_000.0
     assert error_s.max() <= 0.020
+    if netft_error_s is not None:
+        # The same holds for the Net F/T's ft_sequence line (crystal 40 ppm slow): never before the sample (within
+        # one 7 kHz internal sample, as the simulator sends a record once its sample time has passed), at most the
+        # floor of UDP delivery and the receiver's 10 ms block period after it.
+        assert netft_error_s.min() >= -1.0 / 7000.0
+        assert netft_error_s.max() <= 0.020
     assert values["aux_clock_points"] > 10 and values["alignment_error_estimate_s"] > 0
 
 
-def test_short_sweep_on_can_with_aux_board_agrees_with_the_serial_board_alone(
-    tmp_path, monkeypatch
-):
-    """The same short plan on the ORNI-DAQ9 alone and on the NETCANOEM with the aux board: the cycle-averaged
-    loads agree within their sigmas."""
-    # The simulated gauges' offsets drift with the motor's running time (effect balance_thermal_drift); the two rigs
-    # run the plan at different paces, so what the tares leave of that drift differs by up to 8 mN in y_n between any
-    # two runs, the ORNI-DAQ9's alone included, far beyond the cycle sigmas. It is switched off here: this test
-    # compares the balance backends, not the drift model (test_tare_drift.py covers that).
-    simulated_signals = SharedTunnelSignals.from_simulator.__func__
-
-    def without_thermal_drift(cls, **arguments):
-        return simulated_signals(
-            cls, **arguments, effects=EffectSet().without("balance_thermal_drift")
-        )
-
-    monkeypatch.setattr(SharedTunnelSignals, "from_simulator", classmethod(without_thermal_drift))
-    # A polled balance loses the samples of every stall of its poller (tens of ms when other jobs load both cores
-    # and this test runs niced); the sweep retakes such records, as for an overloaded serial link. More retakes than
-    # the default 3 keep the test about the backends, not about how busy the host is.
-    monkeypatch.setattr(set_point_recording, "MAX_RETAKES", 12)
-    plan_document = {
-        "plan": {"name": "short"},
-        "configuration": {"tail_id": "S3", "x_h_mm": 98},
-        "steady_state": {"theta_deg": 25.0, "v_m_s": 0.8, "f_hz": 13.5},
-        "sweeps": {"theta_deg": [3.0]},
-        "protocol": {
-            "steady_state_repeats": 1,
-            "record_s": 0.6,
-            "tailless_points": "none",
-            "sample_rate_hz": 5000.0,
-        },
-        # The loads follow the velocity the fan really reached (x_n: about 0.4 mN per mm/s here); a tight velocity
-        # tolerance makes both rigs record at the same conditions, so what is left to compare is the balance.
-        "settle": {"stable_for_s": 0.3, "timeout_s": 60, "velocity_tolerance_m_s": 0.002},
-    }
-    plan = plan_from_document(plan_document, "short.toml")
-    tables = []
-    for source, time_scale, replacements in (
-        (DEFAULT_RIG_FILE, 5.0, {}),
-        (
-            CAN_AUX_RIG,  # 250 polls/s and a 5 kHz aux board keep the simulated CAN light enough for a busy host
-            2.0,
-            {"sample_rate_hz = 500.0": "sample_rate_hz = 250.0", "10000.0": "5000.0"},
-        ),
-    ):
-        path = rig_copy(tmp_path / source.stem, source, replacements)
-        with Rig.from_file(path, time_scale=time_scale) as rig:
-            # resumed where a busy host lost samples through a record's retakes
-            result = run_sweep_to_completion(plan, rig, tmp_path / source.stem / "data")
-        assert result.status == "completed", result.message
-        tables.append(cycle_averaged_table(result.run_directories))
-    serial, aligned = tables
-    recording = load_recording(result.run_directories[0])
-    frame = recording.set_points_frame()
-    assert (frame["alignment_error_estimate_s"] < 0.02).all()  # a tenth of a 13.5 Hz flap at most
-    assert recording.metadata["rig"]["alignment"]["balance_poll_rate_hz"] == 250.0
-    assert len(serial) == len(aligned) >= 2
-    np.testing.assert_allclose(aligned["f_hall_hz"], serial["f_hall_hz"], atol=0.1)
-    for load in ("x_n", "y_n", "z_n", "l_n_m", "m_n_m", "n_n_m"):
-        # One sigma of each: the cycle scatter's (2 sigma / 2) and the tare's; 3 sigma combined, as the two rigs'
-        # noise, fan creep and poll timing are independent.
-        sigma = np.sqrt(
-            (serial[f"{load}_2sigma"] / 2) ** 2
-            + (aligned[f"{load}_2sigma"] / 2) ** 2
-            + serial[f"{load}_tare_se"] ** 2
-            + aligned[f"{load}_tare_se"] ** 2
-        )
-        difference = np.abs(aligned[load] - serial[load])
-        assert np.all(difference <= 3 * sigma), (load, list(difference), list(sigma))
-
-
-def test_rig_check_shows_the_balance_and_the_aux_board_in_rows_of_their_own():
+@pytest.mark.parametrize(
+    ("source", "key"), [(CAN_AUX_RIG, "[balance.can]"), (NETFT_AUX_RIG, "[balance.netft]")]
+)
+def test_rig_check_shows_the_balance_and_the_aux_board_in_rows_of_their_own(source, key):
     from ornitail.acquisition.rig_check import check_rig
 
-    result = check_rig(CAN_AUX_RIG)
+    result = check_rig(source)
     rows = {check.rig_file_key: check for check in result.instruments}
-    assert rows["[balance.can]"].status == "ok"
+    assert rows[key].status == "ok", rows[key]
     assert rows["[balance.aux_daq].port"].status == "ok"
     assert "ORNI-DAQ9" in rows["[balance.aux_daq].port"].identity
 

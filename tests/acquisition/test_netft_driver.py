@@ -11,7 +11,11 @@ import pytest
 
 from ornitail.acquisition import netft_protocol as protocol
 from ornitail.acquisition.instrument_errors import InstrumentDisconnected
-from ornitail.acquisition.netft_driver import NetFtDriver, WrenchBlock, driver_from_rig_table
+from ornitail.acquisition.netft_driver import (
+    NetFtDriver,
+    WrenchBlock,
+    netft_settings_from_table,
+)
 from ornitail.acquisition.simulated_netft import SimulatedNetFt, constant_load
 from ornitail.core.errors import UserInputError
 
@@ -102,8 +106,10 @@ def test_counts_per_unit_from_the_rig_file_need_no_web_server():
             "counts_per_torque": 1_000_000,
             "force_unit": "N",
             "torque_unit": "N-m",
+            "rdt_rate_hz": RATE_HZ,
         }
-        with driver_from_rig_table("rig.toml", table) as driver:
+        settings = netft_settings_from_table("rig.toml", table)
+        with NetFtDriver.from_settings(settings) as driver:
             assert driver.counts_per_unit == protocol.CountsPerUnit(1e6, 1e6, "N", "N-m")
             driver.start_streaming()
             blocks = collect(driver, records_through(20))
@@ -118,7 +124,7 @@ def test_counts_per_unit_from_the_rig_file_need_no_web_server():
             r"\[balance.netft\].counts_per_torque: give all of",
         ),
         (
-            {"host": "10.0.0.2", "rdt_port": 70000},
+            {"host": "10.0.0.2", "rdt_rate_hz": 1000, "rdt_port": 70000},
             r"\[balance.netft\].rdt_port: 70000 must be in 1..65535",
         ),
         (
@@ -133,17 +139,23 @@ def test_counts_per_unit_from_the_rig_file_need_no_web_server():
         ),
         ({"host": "h", "port": 1}, r"\[balance.netft\].port: unknown key"),
         ({}, r"\[balance.netft\].host: required key is missing"),
+        ({"host": "h"}, r"\[balance.netft\].rdt_rate_hz: required key is missing"),
+        (
+            {"host": "h", "rdt_rate_hz": 3000},
+            r"\[balance.netft\].rdt_rate_hz: 3000 records/s is not an RDT output rate",
+        ),
     ],
 )
 def test_rig_table_mistakes_name_file_and_key(table, message):
     with pytest.raises(UserInputError, match=r"rig.toml: " + message):
-        driver_from_rig_table("rig.toml", table)
+        netft_settings_from_table("rig.toml", table)
 
 
 def test_rig_table_without_scaling_reads_it_from_the_device():
-    driver = driver_from_rig_table("rig.toml", {"host": "10.0.0.2"})
+    settings = netft_settings_from_table("rig.toml", {"host": "10.0.0.2", "rdt_rate_hz": 7000})
+    driver = NetFtDriver.from_settings(settings)
     assert (driver.host, driver.rdt_port, driver.http_port) == ("10.0.0.2", 49152, 80)
-    assert driver.counts_per_unit is None
+    assert driver.counts_per_unit is None and settings.rdt_rate_hz == 7000
 
 
 def test_dropped_records_are_counted_exactly_from_sequence_gaps():

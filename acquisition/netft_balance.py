@@ -1,0 +1,205 @@
+"""The ATI Net F/T as a :class:`TimedGaugeBalance`: RDT records as gauge volts, placed on the host clock.
+
+The device streams forces and torques (its own calibration applied inside, scaled by its counts per unit); the
+recordings (and ``ornitail process``) hold gauge volts and apply the rig file's ATI calibration to them, as for the
+ORNI-DAQ9 board. The gauge volts of a record are therefore the loads through the inverse of the ``.cal`` matrix
+(``volts = matrix_si^-1 @ wrench``): exact, as both are linear, when the device's active calibration is the ``.cal``
+file's sensor. RDT does not report which calibration the device holds, so that is the operator's to ensure (unlike
+the NETCANOEM, whose matrix is read and compared at open).
+
+Timing: each record carries ``ft_sequence``, the device's internal sample counter (7000 per second of its own
+crystal). Like the auxiliary board's counter it is mapped to host time by a
+:class:`~ornitail.acquisition.aux_clock_model.CounterClockModel` fitted under the blocks' arrival times, so the
+records' sampling times are on the host clock (rig time) and :class:`AlignedBalance` interpolates them as it does
+the NETCANOEM's polls. When a lower arrival moves the line back, a record it would place at or before one already
+delivered is left out (the rows are interpolated across it).
+
+Link health: ``rdt_sequence`` gaps are lost samples; datagrams that are not whole records are resyncs and their
+bytes garbage. The device's status word (non-zero: e.g. a saturated gauge, manual section 18.2) flags a sample.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ornitail.acquisition import netft_protocol as protocol
+from ornitail.acquisition.aux_clock_model import CounterClockModel, CounterUnwrapper
+from ornitail.acquisition.balance_interface import (
+    BalanceBlock,
+    LinkCounts,
+    TimedGaugeBalance,
+    TimedGauges,
+)
+from ornitail.acquisition.daq_protocol import CHANNEL_NAMES
+from ornitail.acquisition.instrument_errors import InstrumentReplyError
+from ornitail.acquisition.netft_driver import NetFtDriver, rdt_rate_problem
+from ornitail.core.errors import UserInputError
+
+GAUGE_CHANNELS = tuple(CHANNEL_NAMES[:6])
+
+
+class NetFtBalance(NetFtDriver, TimedGaugeBalance):
+    """A Net F/T streaming RDT records at its configured rate; blocks hold the six gauges in volts.
+
+    Parameters
+    ----------
+    host : str
+        The device's address.
+    calibration_matrix_si : (6, 6) array
+        The ``.cal`` file's matrix, N and N m per gauge volt (``AtiCalibration.matrix_si``).
+    rdt_rate_hz : float
+        The RDT output rate the device is set to, records/s (``[balance.netft].rdt_rate_hz``); checked against
+        the records' ``ft_sequence`` steps.
+    Other keyword arguments are :class:`NetFtDriver`'s.
+    """
+
+    timing_method = "ft_sequence-to-host-time lower envelope"
+
+    def __init__(
+        self,
+        host: str,
+        *,
+        calibration_matrix_si: np.ndarray,
+        rdt_rate_hz: float,
+        **driver_arguments,
+    ) -> None:
+        self._blocks_dropped_count = 0
+        super().__init__(host, **driver_arguments)
+        self.volts_per_si = np.linalg.inv(np.asarray(calibration_matrix_si, dtype=float))
+        self.rdt_rate_hz = float(rdt_rate_hz)
+        self._reset_timing()
+
+    def _reset_timing(self) -> None:
+        self._model = CounterClockModel(protocol.INTERNAL_SAMPLE_RATE_HZ)
+        self._unwrapper = CounterUnwrapper()
+        self._last_counter: int | None = None
+        self._last_time_s = -np.inf
+
+    # -- BalanceStream ----------------------------------------------------------------------
+    @property
+    def blocks_dropped(self) -> int:
+        """Blocks discarded because the queue was full."""
+        return self._blocks_dropped_count
+
+    @blocks_dropped.setter
+    def blocks_dropped(self, value: int) -> None:
+        self._blocks_dropped_count = int(value)
+
+    @property
+    def channel_names(self) -> tuple[str, ...]:
+        """The six gauges."""
+        return GAUGE_CHANNELS
+
+    def open(self) -> str:
+        """Open the device (:meth:`NetFtDriver.open`); its identity: the scaling in use."""
+        scaling = super().open()
+        return (
+            f"counts_per_force={scaling.counts_per_force:.10g} {scaling.force_unit} "
+            f"counts_per_torque={scaling.counts_per_torque:.10g} {scaling.torque_unit}"
+        )
+
+    def check_sample_rate(self, sample_rate_hz: float) -> None:
+        """The device streams at the RDT rate it is set to: refuse another rate (UserInputError)."""
+        problem = rdt_rate_problem(sample_rate_hz)
+        if problem is None and sample_rate_hz != self.rdt_rate_hz:
+            problem = (
+                f"{sample_rate_hz:g} records/s: the device streams at its RDT output rate, "
+                f"{self.rdt_rate_hz:g} records/s ([balance.netft].rdt_rate_hz)"
+            )
+        if problem is not None:
+            raise UserInputError(f"{self.name}: sample_rate_hz", problem)
+
+    def start_stream(self, sample_rate_hz: float) -> float:
+        """Start RDT streaming (the rate must be the device's, :meth:`check_sample_rate`); records/s."""
+        self.check_sample_rate(sample_rate_hz)
+        self._reset_timing()
+        self.start_streaming()
+        return self.rdt_rate_hz
+
+    def stop_stream(self) -> None:
+        """Stop streaming (the device's safe state)."""
+        self.stop()
+
+    def raise_if_failed(self) -> None:
+        """Raise the receiver's error, if it ended with one."""
+        if self._failure is not None:
+            raise self._failure
+
+    def gauge_volts(self, wrench_si: np.ndarray) -> np.ndarray:
+        """(n, 6) N and N m -> (n, 6) gauge volts of the ``.cal`` matrix, V."""
+        return np.asarray(wrench_si, dtype=float) @ self.volts_per_si.T
+
+    def read_block(self, timeout_s: float) -> BalanceBlock | None:
+        """The next records as gauge volts, counted by their ``rdt_sequence`` (a gap is a lost record)."""
+        block = self.get_block(timeout_s=timeout_s)
+        if block is None:
+            return None
+        return BalanceBlock(
+            block.rdt_sequence.astype(np.uint32),
+            self.gauge_volts(block.wrench),
+            block.host_time_s,
+            block.status != 0,
+        )
+
+    def read_timed_gauges(self, timeout_s: float) -> TimedGauges | None:
+        """The next records in gauge volts at their sampling times on the host clock (None after ``timeout_s``).
+
+        Raises
+        ------
+        InstrumentReplyError
+            The records are not ``7000 / rdt_rate_hz`` internal samples apart: the device streams at another
+            rate than the rig file says.
+        """
+        block = self.get_block(timeout_s=timeout_s)
+        if block is None:
+            return None
+        counters = self._unwrapper.unwrap(block.ft_sequence)
+        self._check_record_spacing(counters)
+        self._model.add(int(counters[-1]), block.host_time_s)
+        fit = self._model.fit()
+        assert fit is not None
+        times = fit.time_of(counters)
+        later = times > self._last_time_s
+        if not later.any():
+            return None
+        self._last_time_s = float(times[later][-1])
+        return TimedGauges(
+            times[later], self.gauge_volts(block.wrench[later]), (block.status != 0)[later]
+        )
+
+    def _check_record_spacing(self, counters: np.ndarray) -> None:
+        chain = counters if self._last_counter is None else np.r_[self._last_counter, counters]
+        self._last_counter = int(counters[-1])
+        if len(chain) < 2:
+            return
+        spacing = int(
+            np.gcd.reduce(np.diff(chain))
+        )  # a lost record doubles a step, not the spacing
+        expected = round(protocol.INTERNAL_SAMPLE_RATE_HZ / self.rdt_rate_hz)
+        if spacing != expected:
+            raise InstrumentReplyError(
+                self.name,
+                f"records from {self.address} are {spacing} internal samples apart "
+                f"({protocol.INTERNAL_SAMPLE_RATE_HZ / max(spacing, 1):g} records/s), not {expected} "
+                f"({self.rdt_rate_hz:g} records/s, [balance.netft].rdt_rate_hz): set the device's RDT output "
+                "rate or the rig file",
+            )
+
+    def sample_time_uncertainty_s(self) -> float:
+        """How sharply the ``ft_sequence`` line is known (its envelope), s; 0 before the first block."""
+        fit = self._model.fit()
+        return 0.0 if fit is None else fit.envelope_s
+
+    def link_counts(self) -> LinkCounts:
+        """Lost records (``rdt_sequence`` gaps); datagrams that are not whole records as resyncs and garbage."""
+        return LinkCounts(
+            lost_samples=self.lost_records,
+            garbage_bytes=self.malformed_bytes,
+            resyncs=self.malformed_datagrams,
+        )
+
+    def adc_limits_v(self) -> tuple[np.ndarray, np.ndarray]:
+        """Unbounded: the gauges' ADC is inside the device, which reports saturation in its status word (a
+        flagged sample), V."""
+        infinite = np.full(len(GAUGE_CHANNELS), np.inf)
+        return -infinite, infinite
