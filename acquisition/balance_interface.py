@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from ornitail.calibration.signal_channels import GAUGE_CHANNELS
+
 
 @dataclass
 class BalanceBlock:
@@ -136,6 +138,21 @@ class TimedGaugeBalance(BalanceStream):
 
     timing_method: str
     """How the samples are placed on the host clock, for ``run.json``."""
+    _blocks_dropped_count: int = 0
+
+    @property
+    def blocks_dropped(self) -> int:
+        """Blocks discarded because the queue was full."""
+        return self._blocks_dropped_count
+
+    @blocks_dropped.setter
+    def blocks_dropped(self, value: int) -> None:
+        self._blocks_dropped_count = int(value)
+
+    @property
+    def channel_names(self) -> tuple[str, ...]:
+        """The six gauges."""
+        return GAUGE_CHANNELS
 
     @abstractmethod
     def check_sample_rate(self, sample_rate_hz: float) -> None:

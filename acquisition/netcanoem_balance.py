@@ -22,14 +22,13 @@ from ornitail.acquisition.balance_interface import (
     TimedGaugeBalance,
     TimedGauges,
 )
-from ornitail.acquisition.daq_protocol import CHANNEL_NAMES
 from ornitail.acquisition.instrument_errors import InstrumentReplyError
 from ornitail.acquisition.netcanoem_driver import NetCanOemDriver
+from ornitail.calibration.signal_channels import GAUGE_CHANNELS
 
 CALIBRATION_MATCH_TOLERANCE = 1e-3
 """Largest relative spread of (board matrix / .cal matrix) over the elements that matter: the board stores its
 matrix as float32 (relative rounding 6e-8), so a larger spread means another sensor's calibration."""
-GAUGE_CHANNELS = tuple(CHANNEL_NAMES[:6])
 
 
 def volts_per_gauge_count(
@@ -60,27 +59,12 @@ class NetCanOemBalance(NetCanOemDriver, TimedGaugeBalance):
     timing_method = "request time stamps"
 
     def __init__(self, *, calibration_matrix_si: np.ndarray, **driver_arguments) -> None:
-        self._blocks_dropped_count = 0
         super().__init__(**driver_arguments)
         self.calibration_matrix_si = np.asarray(calibration_matrix_si, dtype=float)
         self.volts_per_count: float | None = None
         self._next_counter = 0
 
     # -- BalanceStream ----------------------------------------------------------------------
-    @property
-    def blocks_dropped(self) -> int:
-        """Blocks discarded because the queue was full."""
-        return self._blocks_dropped_count
-
-    @blocks_dropped.setter
-    def blocks_dropped(self, value: int) -> None:
-        self._blocks_dropped_count = int(value)
-
-    @property
-    def channel_names(self) -> tuple[str, ...]:
-        """The six gauges."""
-        return GAUGE_CHANNELS
-
     def open(self) -> str:
         """Open the bus (:meth:`NetCanOemDriver.open`), read the board's calibration, derive its volts per count.
 

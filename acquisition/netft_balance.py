@@ -30,12 +30,10 @@ from ornitail.acquisition.balance_interface import (
     TimedGaugeBalance,
     TimedGauges,
 )
-from ornitail.acquisition.daq_protocol import CHANNEL_NAMES
 from ornitail.acquisition.instrument_errors import InstrumentReplyError
 from ornitail.acquisition.netft_driver import NetFtDriver, rdt_rate_problem
+from ornitail.calibration.signal_channels import GAUGE_CHANNELS
 from ornitail.core.errors import UserInputError
-
-GAUGE_CHANNELS = tuple(CHANNEL_NAMES[:6])
 
 
 class NetFtBalance(NetFtDriver, TimedGaugeBalance):
@@ -63,7 +61,6 @@ class NetFtBalance(NetFtDriver, TimedGaugeBalance):
         rdt_rate_hz: float,
         **driver_arguments,
     ) -> None:
-        self._blocks_dropped_count = 0
         super().__init__(host, **driver_arguments)
         self.volts_per_si = np.linalg.inv(np.asarray(calibration_matrix_si, dtype=float))
         self.rdt_rate_hz = float(rdt_rate_hz)
@@ -76,20 +73,6 @@ class NetFtBalance(NetFtDriver, TimedGaugeBalance):
         self._last_time_s = -np.inf
 
     # -- BalanceStream ----------------------------------------------------------------------
-    @property
-    def blocks_dropped(self) -> int:
-        """Blocks discarded because the queue was full."""
-        return self._blocks_dropped_count
-
-    @blocks_dropped.setter
-    def blocks_dropped(self, value: int) -> None:
-        self._blocks_dropped_count = int(value)
-
-    @property
-    def channel_names(self) -> tuple[str, ...]:
-        """The six gauges."""
-        return GAUGE_CHANNELS
-
     def open(self) -> str:
         """Open the device (:meth:`NetFtDriver.open`); its identity: the scaling in use."""
         scaling = super().open()

@@ -32,8 +32,9 @@ from ornitail.acquisition.calibration_copies import CalibrationSources  # noqa: 
 from ornitail.acquisition.recording_layout import SET_POINT_KIND_TARE  # noqa: E402
 from ornitail.acquisition.recording_reader import Recording  # noqa: E402
 from ornitail.balance.hall_cycles import HallEdgeSettings, rising_edge_times  # noqa: E402
-from ornitail.balance.sweep_table import GAUGE_CHANNELS, balance_calibration_of  # noqa: E402
+from ornitail.balance.sweep_table import balance_calibration_of  # noqa: E402
 from ornitail.calibration.hotwire_laws import HotwireLaw  # noqa: E402
+from ornitail.calibration.signal_channels import GAUGE_CHANNELS  # noqa: E402
 from ornitail.calibration.thermocouple_amplifier import (  # noqa: E402
     CELSIUS_TO_KELVIN_OFFSET,
     temperature_k_from_amplifier_voltage,

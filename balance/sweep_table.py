@@ -56,11 +56,11 @@ from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.calibration.flapping_frequency_check import (
     check_flapping_frequency,
 )
+from ornitail.calibration.signal_channels import GAUGE_CHANNELS
 from ornitail.calibration.tool_transform import ToolTransform
 from ornitail.core.errors import UserInputError
 from ornitail.vehicle.constants import DELFLY_GEAR_RATIO, STANDARD_GRAVITY_M_S2
 
-GAUGE_CHANNELS = tuple(f"gauge_{index}_v" for index in range(6))
 SATURATION_COLUMNS = (
     "saturated_samples",
     "over_range_samples",

@@ -16,3 +16,5 @@ TUNNEL_SIGNAL_CHANNELS: tuple[str, ...] = (
     "thermocouple_v",
     "hall_v",
 )
+GAUGE_CHANNELS: tuple[str, ...] = TUNNEL_SIGNAL_CHANNELS[:6]
+"""The six strain-gauge bridges alone (what a gauge-only balance such as the NETCANOEM or the Net F/T carries)."""
