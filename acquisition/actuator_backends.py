@@ -8,12 +8,14 @@ adds a backend without changing ornitail by declaring an entry point named ``<ro
     "fan.nidaqmx_analog" = "my_tunnel.fan:NiDaqmxTunnelFan"
 
 Built-in names win over entry points of the same name. Every lookup failure is a ``UserInputError`` naming the
-rig file's ``[<role>].backend``.
+rig file's ``[<role>].backend``. The same group supplies the rig's simulated instruments (role ``rig``,
+:mod:`rig_simulation`).
 """
 
 from __future__ import annotations
 
 from importlib import metadata
+from typing import TypeVar
 
 from ornitail.acquisition.actuator_interfaces import ROLE_INTERFACES, Actuator, ActuatorContext
 from ornitail.acquisition.modbus_vfd_driver import ModbusVfdTunnelFan
@@ -28,6 +30,7 @@ from ornitail.core.errors import UserInputError
 
 ENTRY_POINT_GROUP = "ornitail.instruments"
 DEFAULT_BACKEND = ORNI_LINE
+T = TypeVar("T")
 
 BUILT_IN_BACKENDS: dict[tuple[str, str], type[Actuator]] = {
     ("fan", ORNI_LINE): OrniLineTunnelFan,
@@ -66,13 +69,34 @@ def backend_class(role: str, name: str, where: str) -> type[Actuator]:
     """
     if (role, name) in BUILT_IN_BACKENDS:
         return BUILT_IN_BACKENDS[role, name]
+    return entry_point_class(
+        role,
+        name,
+        ROLE_INTERFACES[role],
+        where,
+        missing=f"{name!r} is not a {role} backend; available: {', '.join(backend_names(role))}",
+        registrant="third-party backends",
+    )
+
+
+def entry_point_class(
+    role: str, name: str, interface: type[T], where: str, *, missing: str, registrant: str
+) -> type[T]:
+    """The class named by the entry point ``<role>.<name>`` of ``ornitail.instruments``, a subclass of
+    ``interface``; ``where`` names the rig-file field in messages. With no such entry point the message is
+    ``missing``, then who registers one (``registrant``) and how.
+
+    Raises
+    ------
+    UserInputError
+        No such entry point, it cannot be loaded, or it does not name a subclass of ``interface``.
+    """
     wanted = f"{role}.{name}"
     matches = [entry for entry in installed_entry_points() if entry.name == wanted]
     if not matches:
         raise UserInputError(
             where,
-            f"{name!r} is not a {role} backend; available: {', '.join(backend_names(role))} "
-            f"(third-party backends register an entry point {wanted!r} in the group {ENTRY_POINT_GROUP!r})",
+            f"{missing} ({registrant} register an entry point {wanted!r} in the group {ENTRY_POINT_GROUP!r})",
         )
     entry = matches[0]
     try:
@@ -82,12 +106,11 @@ def backend_class(role: str, name: str, where: str) -> type[Actuator]:
             where,
             f"backend {name!r} ({entry.value}) cannot be loaded: {type(error).__name__}: {error}",
         ) from None
-    interface = ROLE_INTERFACES[role]
     if not (isinstance(loaded, type) and issubclass(loaded, interface)):
         raise UserInputError(
             where,
             f"backend {name!r} ({entry.value}) is not a subclass of "
-            f"ornitail.acquisition.actuator_interfaces.{interface.__name__}",
+            f"{interface.__module__}.{interface.__name__}",
         )
     return loaded
 

@@ -1,8 +1,9 @@
 """The rig: the instruments a rig file names, their safety limits, connect/close and safe state.
 
 ``Rig.from_file(path)`` reads and checks the rig file and its calibration and tunnel-table files;
-``connect()`` opens the drivers (for a simulated rig it first starts the simulated instruments on
-ptys and a virtual CAN channel, and the same drivers connect to them); ``close()`` always brings the
+``connect()`` opens the drivers (for a simulated rig it first reaches the simulated instruments, through the
+simulation backend the rig file names (:mod:`rig_simulation`), and the same drivers connect to their ptys and
+virtual CAN channel); ``close()`` always brings the
 motor and the tunnel fan to a safe state before closing anything, also after an error. Use it as a
 context manager so that every exit path goes through ``close()``.
 
@@ -13,8 +14,8 @@ a crashed host left behind (the DAQ board is sent ``STOP`` first), then ``connec
 stop and strut halt before homing, whatever the instruments were doing.
 
 A rig file with ``[rig].simulator_control`` connects to simulated instruments served by another process
-(``python -m ornitail.acquisition.rig_simulator_server``): the ports are real ptys, rig time runs at the server's
-time scale and the simulated vehicle is changed through the control socket.
+(``python -m ornitail.simulated_instruments.rig_simulator_server``): the ports are real ptys, rig time runs at the
+server's time scale and the simulated vehicle is changed through the control socket.
 """
 
 from __future__ import annotations
@@ -38,9 +39,9 @@ from ornitail.acquisition.balance_interface import BalanceStream
 from ornitail.acquisition.fan_speed_map import FanSpeedMap
 from ornitail.acquisition.instrument_errors import InstrumentError
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, RigDescription, read_rig_file
-from ornitail.acquisition.rig_simulator_server import SimulatorControl
-from ornitail.acquisition.simulated_rig_instruments import SimulatedRigInstruments
+from ornitail.acquisition.rig_simulation import RigSimulation, simulation_backend
 from ornitail.calibration.ati_calibration import AtiCalibration
+from ornitail.calibration.hotwire_laws import HotwireLaw
 from ornitail.calibration.tunnel_table import TunnelVelocityTable
 from ornitail.core.errors import UserInputError, require_finite
 
@@ -67,8 +68,9 @@ class Rig:
     balance : BalanceStream
         The balance backend ``[balance].route`` (and ``[balance.aux_daq]``) chose (:mod:`balance_backends`), set
         by :meth:`connect`; the rig calls it only through :class:`BalanceStream`.
-    simulators : SimulatedRigInstruments | None
-        The running simulators of a simulated rig (fault injection in tests), else None.
+    simulators : RigSimulation | None
+        The simulated instruments of a simulated rig once reached (ornitail's own expose each simulator, for
+        fault injection in tests), else None.
     safe_state_outcome : dict[str, str]
         The last :meth:`safe_state` (also run by :meth:`close`), per actuator created (fan, motor, strut):
         ``"safe"`` (confirmed), ``"failed"`` (no confirmation) or ``"not connected"`` (its port never opened).
@@ -76,6 +78,7 @@ class Rig:
 
     def __init__(self, description: RigDescription) -> None:
         self.description = description
+        self._simulation = simulation_backend(description)
         self.calibration = AtiCalibration.from_file(description.calibration_path)
         self.tunnel_table = TunnelVelocityTable.from_csv(description.tunnel_table_path)
         limits = description.limits
@@ -96,10 +99,9 @@ class Rig:
         self.strut: PitchStrut | None = None
         self.motor: FlappingMotor | None = None
         self.balance: BalanceStream | None = None
-        self.simulators: SimulatedRigInstruments | None = None
-        self.simulator_control: SimulatorControl | None = None
+        self.simulators: RigSimulation | None = None
         self.safe_state_outcome: dict[str, str] = {}
-        self._time_scale = description.time_scale if description.simulated else 1.0
+        self._time_scale = description.time_scale if self._simulation is not None else 1.0
         self._balance_clock: tuple[float, float] | None = None  # (rig time at start, s; rate, Hz)
 
     @classmethod
@@ -143,22 +145,20 @@ class Rig:
         return self
 
     def start_simulation(self) -> None:
-        """Reach the rig's simulated instruments: start them in this process (``[rig].simulated``) or ask their
-        server for its time scale (``[rig].simulator_control``); nothing for real instruments.
+        """Reach the rig's simulated instruments through the simulation backend its rig file names (start them in
+        this process for ``[rig].simulated``, reach their server for ``[rig].simulator_control``) and take their
+        time scale; nothing for real instruments.
 
         Raises
         ------
         InstrumentDisconnected
             The simulator server's control socket does not answer.
         """
-        description = self.description
-        if description.simulator_control is not None and self.simulator_control is None:
-            self.simulator_control = SimulatorControl(description.simulator_control)
-            self._time_scale = float(self.simulator_control.state()["time_scale"])
-        if description.simulated and self.simulators is None:
-            self.simulators = SimulatedRigInstruments.start(
-                description, self.calibration, self.tunnel_table
+        if self._simulation is not None and self.simulators is None:
+            self.simulators = self._simulation.start(
+                self.description, self.calibration, self.tunnel_table
             )
+            self._time_scale = self.simulators.time_scale
 
     def create_drivers(
         self,
@@ -179,21 +179,15 @@ class Rig:
         can_interface, can_channel = description.can.interface, description.can.channel
         netft = description.netft
         if self.simulators is not None:
-            simulators = self.simulators
-            ports.update(simulators.actuator_ports())
-            if simulators.daq_board is not None:
-                ports["daq"] = simulators.daq_board.port_path
-            if simulators.aux_daq_board is not None:
-                ports["aux_daq"] = simulators.aux_daq_board.port_path
-            can_interface, can_channel = "virtual", simulators.can_channel or can_channel
-            if simulators.netft is not None and netft is not None:
+            ports.update(self.simulators.ports())
+            can_interface, can_channel = self.simulators.can_bus() or (can_interface, can_channel)
+            address = self.simulators.netft_address()
+            if address is not None and netft is not None:
+                host, rdt_port, http_port = address
                 netft = dataclasses.replace(
-                    netft,
-                    host=simulators.netft.host,
-                    rdt_port=simulators.netft.rdt_port,
-                    http_port=simulators.netft.http_port,
+                    netft, host=host, rdt_port=rdt_port, http_port=http_port
                 )
-        simulated = description.simulated or description.simulator_control is not None
+        simulated = self._simulation is not None
         reply_timeout_s = SIMULATED_REPLY_TIMEOUT_S if simulated else REPLY_TIMEOUT_S
 
         def actuator(role: str, name: str) -> Any:
@@ -289,7 +283,6 @@ class Rig:
             self.simulators.close()
             self.simulators = None
         self.fan = self.strut = self.motor = self.balance = None
-        self.simulator_control = None
         if errors and raise_errors:
             raise errors[0]
         return errors
@@ -370,7 +363,7 @@ class Rig:
         return {
             "name": description.name,
             "file": str(description.path),
-            "simulated": description.simulated or description.simulator_control is not None,
+            "simulated": self._simulation is not None,
             "time_scale": self._time_scale,
             "balance_route": description.balance_route,
             "tool_transform_mm_deg": list(description.tool_transform.as_mm_deg()),
@@ -394,21 +387,19 @@ class Rig:
         return self._time_scale
 
     def now_s(self) -> float:
-        """Rig time, s: the simulated clock of a simulated rig, else the monotonic wall clock."""
+        """Rig time, s: the simulated instruments' clock of a simulated rig, else the monotonic wall clock."""
         if self.simulators is not None:
-            return self.simulators.clock.now_s()
+            return self.simulators.now_s()
         return time.monotonic() * self._time_scale
+
+    def hotwire_law(self) -> HotwireLaw | None:
+        """The law of the rig's hot-wire when the rig knows it (the simulated instruments' own), else None."""
+        return self._simulation.hotwire_law() if self._simulation is not None else None
 
     def mount_vehicle(self, tail_id: str, x_h_m: float) -> None:
         """Tell a simulated rig which vehicle is on the balance (a real rig has the real one)."""
-        if self.simulator_control is not None:
-            self.simulator_control.request("mount", tail_id=tail_id, x_h_mm=x_h_m * 1000.0)
-            return
-        if self.simulators is None:
-            return
-        from ornitail.sim.configuration import study_configuration
-
-        self.simulators.signals.mount_vehicle(study_configuration(tail_id, x_h_m * 1000.0))
+        if self.simulators is not None:
+            self.simulators.mount_vehicle(tail_id, x_h_m)
 
     def change_tail(self, tail_attached: bool, operator_prompt: Callable[[str], None]) -> None:
         """Fit or remove the tail with motor and tunnel in a safe state.
@@ -420,10 +411,7 @@ class Rig:
         if errors:
             raise errors[0]
         if self.simulators is not None:
-            self.simulators.signals.set_operating_point(tail_attached=tail_attached)
-            return
-        if self.simulator_control is not None:
-            self.simulator_control.request("tail", attached=tail_attached)
+            self.simulators.set_tail_attached(tail_attached)
             return
         action = "Fit the tail" if tail_attached else "Remove the tail (keep the base tail mount)"
         operator_prompt(f"{action}; motor and tunnel are off.")

@@ -146,7 +146,7 @@ def check_rig(rig_path: str | Path) -> RigCheck:
     return RigCheck(
         rig_file=description.path,
         rig_name=description.name,
-        simulated=description.simulated or description.simulator_control is not None,
+        simulated=description.simulation is not None,
         serial_ports=serial_ports_found(),
         can_interfaces_searched=can_interfaces,
         can_channels=can_channels_found(can_interfaces),

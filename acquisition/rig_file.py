@@ -130,6 +130,16 @@ class RigDescription:
     """``[balance.netft]``: the Net F/T's address, ports, RDT rate and scaling (route ``netft``), else None."""
 
     @property
+    def simulation(self) -> tuple[str, str] | None:
+        """The simulation backend this rig file chooses and the field that chooses it: ``("simulated",
+        "[rig].simulated")`` or ``("simulator_server", "[rig].simulator_control")``; None for real instruments."""
+        if self.simulated:
+            return "simulated", "[rig].simulated"
+        if self.simulator_control is not None:
+            return "simulator_server", "[rig].simulator_control"
+        return None
+
+    @property
     def carries_flap_channels(self) -> bool:
         """True when the balance stream holds the Hall line, hot-wire and thermocouple (what a sweep records):
         the ORNI-DAQ9 balance, or a CAN or Net F/T balance with ``[balance.aux_daq]``."""

@@ -1,9 +1,9 @@
 """Crash harness: `ornitail sweep` killed and signalled at random phases against instruments that outlive it.
 
 The simulated rig's instruments run in a process of their own (``python -m
-ornitail.acquisition.rig_simulator_server``, on ptys), so, as with hardware, they outlive a killed host: the fan and
-motor keep turning and the DAQ board keeps streaming. The harness runs ``ornitail sweep`` as a subprocess and sends
-it kill -9, SIGTERM, SIGHUP or SIGINT (once or twice) at a random moment, then checks:
+ornitail.simulated_instruments.rig_simulator_server``, on ptys), so, as with hardware, they outlive a killed host:
+the fan and motor keep turning and the DAQ board keeps streaming. The harness runs ``ornitail sweep`` as a
+subprocess and sends it kill -9, SIGTERM, SIGHUP or SIGINT (once or twice) at a random moment, then checks:
 
 - samples lost at a kill -9: the board's counter right after the kill against the last counter on disk (in
   seconds of data, and in wall seconds = what a rig at time scale 1 would lose);
@@ -42,8 +42,8 @@ from pathlib import Path
 from typing import Any
 
 from ornitail.acquisition.recording_reader import load_recording
-from ornitail.acquisition.rig_simulator_server import SimulatorControl
 from ornitail.acquisition.run_files import read_journal
+from ornitail.simulated_instruments.rig_simulator_server import SimulatorControl
 
 ORNITAIL = str(Path(sys.executable).parent / "ornitail")
 EXIT_BUSY = 5
@@ -105,7 +105,7 @@ def start_server(directory: Path, time_scale: float, timeout_s: float = 120.0) -
         [
             sys.executable,
             "-m",
-            "ornitail.acquisition.rig_simulator_server",
+            "ornitail.simulated_instruments.rig_simulator_server",
             "--directory",
             str(directory),
             "--time-scale",

@@ -1,6 +1,6 @@
 """Benchmark: stream the simulated ORNI-DAQ9 board through the real driver and recorder.
 
-The simulated board (``ornitail.acquisition.simulated_daq_board``) runs in real time (time scale 1)
+The simulated board (``ornitail.simulated_instruments.daq_board``) runs in real time (time scale 1)
 behind a pty; :class:`SerialDaqDriver` reads and parses the frames and hands every block, in its
 reader thread, to :class:`Recorder`, which writes them to ``samples.h5`` in a temporary data root.
 The script prints the samples lost, CRC errors, achieved / requested rate, the CPU seconds the
@@ -40,11 +40,11 @@ from ornitail.acquisition.recorder import Recorder
 from ornitail.acquisition.recording_layout import ChannelSpec, RunConfiguration, StreamLayout
 from ornitail.acquisition.recording_reader import load_recording
 from ornitail.acquisition.serial_daq_driver import DaqBlock, SerialDaqDriver
-from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
-from ornitail.acquisition.simulated_clock import SimulatedClock
-from ornitail.acquisition.simulated_daq_board import SimulatedDaqBoard
 from ornitail.app.cli_output import emit
 from ornitail.core.errors import UserInputError, require_finite
+from ornitail.simulated_instruments.clock import SimulatedClock
+from ornitail.simulated_instruments.daq_board import SimulatedDaqBoard
+from ornitail.simulated_instruments.shared_signal_source import SharedTunnelSignals
 
 CPU_TARGET_S_PER_S_OF_DATA = 0.2
 DEFAULT_DURATION_S = 30.0

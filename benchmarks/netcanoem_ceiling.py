@@ -39,10 +39,10 @@ from typing import Any
 from ornitail.acquisition import netcanoem_protocol as protocol
 from ornitail.acquisition.netcanoem_driver import NetCanOemDriver
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE
-from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
-from ornitail.acquisition.simulated_clock import SimulatedClock
-from ornitail.acquisition.simulated_netcanoem_board import SimulatedNetCanOemBoard
 from ornitail.calibration.ati_calibration import AtiCalibration
+from ornitail.simulated_instruments.clock import SimulatedClock
+from ornitail.simulated_instruments.netcanoem_board import SimulatedNetCanOemBoard
+from ornitail.simulated_instruments.shared_signal_source import SharedTunnelSignals
 
 BIT_RATE = 1_000_000
 """The board's default bit rate (opcode 0xE divisor 1), bit/s."""

@@ -1,6 +1,6 @@
 """Benchmark: stream the simulated Net F/T at 7 kHz over UDP on the loopback through the real driver.
 
-The simulated device (``ornitail.acquisition.simulated_netft``) runs in a child process, as a real device is a
+The simulated device (``ornitail.simulated_instruments.netft``) runs in a child process, as a real device is a
 machine of its own, and streams RDT records at ``--rate-hz`` to the real :class:`NetFtDriver` in this process,
 which reads the calibration page over HTTP, decodes every datagram, converts to N and N m and counts gaps in
 ``rdt_sequence``. The main thread drains the driver's blocks, as a recorder would.
@@ -24,8 +24,8 @@ import numpy as np
 
 from ornitail.acquisition import netft_protocol as protocol
 from ornitail.acquisition.netft_driver import NetFtDriver
-from ornitail.acquisition.simulated_netft import SimulatedNetFt
 from ornitail.app.cli_output import emit
+from ornitail.simulated_instruments.netft import SimulatedNetFt
 
 DEFAULT_DURATION_S = 600.0
 DEFAULT_RATE_HZ = protocol.INTERNAL_SAMPLE_RATE_HZ

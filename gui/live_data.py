@@ -8,12 +8,11 @@ hot-wire law when one is known, temperature comes from the thermocouple amplifie
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 
 from ornitail.acquisition.daq_protocol import CHANNEL_NAMES
-from ornitail.calibration.hotwire_laws import HotwireLaw, load_hotwire_law
+from ornitail.calibration.hotwire_laws import HotwireLaw
 from ornitail.calibration.thermocouple_amplifier import (
     CELSIUS_TO_KELVIN_OFFSET,
     temperature_k_from_amplifier_voltage,
@@ -21,7 +20,6 @@ from ornitail.calibration.thermocouple_amplifier import (
 from ornitail.gui.rig_session import RigSession
 from ornitail.gui.ring_buffer import RingBuffer
 
-SIMULATED_HOTWIRE_LAW = Path(__file__).parent / "data" / "simulated_hotwire.toml"
 BALANCE_WINDOW_S = 10.0
 INSTRUMENT_HISTORY_ROWS = 600
 HOTWIRE = CHANNEL_NAMES.index("hotwire_bridge_v")
@@ -38,7 +36,7 @@ class LiveData:
     instruments : RingBuffer
         Columns: time (s), pitch (rad), tunnel velocity (m/s), flapping frequency (Hz).
     hotwire_law : HotwireLaw or None
-        Law for the hot-wire velocity (the simulator's for a simulated rig).
+        Law for the hot-wire velocity, the one the rig knows (the simulator's for a simulated rig), else None.
     """
 
     def __init__(self, session: RigSession) -> None:
@@ -60,9 +58,7 @@ class LiveData:
             int(BALANCE_WINDOW_S * self.display_rate_hz), 1 + len(CHANNEL_NAMES)
         )
         self.instruments.clear()
-        self.hotwire_law = (
-            load_hotwire_law(SIMULATED_HOTWIRE_LAW) if rig.description.simulated else None
-        )
+        self.hotwire_law = rig.hotwire_law()
 
     def update(self) -> int:
         """Drain the display feed and take the latest readings; return the balance rows added."""

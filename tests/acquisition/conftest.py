@@ -13,7 +13,7 @@ from collections.abc import Callable, Iterator
 
 import pytest
 
-from ornitail.acquisition.pty_transport import PseudoTerminalPair
+from ornitail.simulated_instruments.pty_transport import PseudoTerminalPair
 
 DEADLINE_S = 30.0
 """Generous deadline for anything a loaded machine may delay, s (never a timing assertion)."""

@@ -21,10 +21,10 @@ from ornitail.acquisition.modbus_vfd_driver import ModbusVfdTunnelFan
 from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.rig_check import check_rig
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, read_rig_file
-from ornitail.acquisition.rig_simulator_server import RigSimulatorServer
 from ornitail.acquisition.zaber_strut_driver import ZaberAsciiStrut
 from ornitail.calibration.tunnel_table import TunnelVelocityTable
 from ornitail.core.errors import UserInputError
+from ornitail.simulated_instruments.rig_simulator_server import RigSimulatorServer
 
 DATA = DEFAULT_RIG_FILE.parent
 MODBUS_ZABER_RIG = DATA / "simulated_rig_modbus_zaber.toml"

@@ -21,9 +21,9 @@ from backend_agreement import (
 
 from ornitail.acquisition import set_point_recording
 from ornitail.acquisition.recording_reader import load_recording
-from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
 from ornitail.acquisition.sweep_plan import plan_from_document
 from ornitail.sim.effects import EffectSet
+from ornitail.simulated_instruments.shared_signal_source import SharedTunnelSignals
 
 SHORT_PLAN = {
     "plan": {"name": "short"},

@@ -29,8 +29,8 @@ from ornitail.acquisition.daq_protocol import (
     encode_frames,
     format_identity,
 )
-from ornitail.acquisition.pty_transport import PseudoTerminalPair
 from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
+from ornitail.simulated_instruments.pty_transport import PseudoTerminalPair
 
 FIRMWARE = Path(__file__).resolve().parents[2] / "firmware" / "orni-daq9"
 PROTOCOL_DOC = Path(__file__).resolve().parents[2] / "docs" / "daq-protocol.md"

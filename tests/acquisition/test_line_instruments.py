@@ -8,10 +8,10 @@ import serial
 
 from ornitail.acquisition.flapping_motor_driver import FlappingMotorDriver
 from ornitail.acquisition.instrument_errors import InstrumentDisconnected, InstrumentReplyError
-from ornitail.acquisition.simulated_line_instrument import first_order_step
 from ornitail.acquisition.strut_pitch_driver import StrutPitchDriver
 from ornitail.acquisition.tunnel_fan_driver import TunnelFanDriver
 from ornitail.core.errors import UserInputError
+from ornitail.simulated_instruments.line_instrument import first_order_step
 
 
 @pytest.fixture

@@ -32,9 +32,9 @@ from ornitail.acquisition.modbus_rtu import (
 from ornitail.acquisition.modbus_rtu_connection import ModbusRtuConnection
 from ornitail.acquisition.modbus_vfd_driver import ModbusVfdSettings, ModbusVfdTunnelFan
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE
-from ornitail.acquisition.simulated_modbus_vfd import SimulatedModbusVfd
 from ornitail.calibration.tunnel_table import TunnelVelocityTable
 from ornitail.core.errors import UserInputError
+from ornitail.simulated_instruments.modbus_vfd import SimulatedModbusVfd
 
 TABLE = TunnelVelocityTable.from_csv(DEFAULT_RIG_FILE.parent / "tunnel_table.csv")
 DELTA_MAP = ModbusVfdSettings(fan_rpm_per_hz=30.0)  # the default (Delta) register map

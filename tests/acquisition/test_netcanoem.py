@@ -9,10 +9,10 @@ import pytest
 from ornitail.acquisition import netcanoem_protocol as protocol
 from ornitail.acquisition.instrument_errors import InstrumentDisconnected
 from ornitail.acquisition.netcanoem_driver import NetCanOemDriver
-from ornitail.acquisition.pytest_plugin import PACKAGED_CALIBRATION
-from ornitail.acquisition.simulated_netcanoem_board import GAUGE_VOLTS_PER_COUNT
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.core.errors import UserInputError
+from ornitail.simulated_instruments.netcanoem_board import GAUGE_VOLTS_PER_COUNT
+from ornitail.simulated_instruments.pytest_plugin import PACKAGED_CALIBRATION
 
 
 @pytest.mark.parametrize(

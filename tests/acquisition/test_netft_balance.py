@@ -10,9 +10,9 @@ import pytest
 from ornitail.acquisition.instrument_errors import InstrumentReplyError
 from ornitail.acquisition.netft_balance import NetFtBalance
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, read_rig_file
-from ornitail.acquisition.simulated_netft import SimulatedNetFt, constant_load
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.core.errors import UserInputError
+from ornitail.simulated_instruments.netft import SimulatedNetFt, constant_load
 
 DATA = DEFAULT_RIG_FILE.parent
 NETFT_AUX_RIG = DATA / "simulated_rig_netft_aux.toml"

@@ -16,8 +16,8 @@ from ornitail.acquisition.netft_driver import (
     WrenchBlock,
     netft_settings_from_table,
 )
-from ornitail.acquisition.simulated_netft import SimulatedNetFt, constant_load
 from ornitail.core.errors import UserInputError
+from ornitail.simulated_instruments.netft import SimulatedNetFt, constant_load
 
 DEADLINE_S = 30.0
 RATE_HZ = 1000.0  # 7000 / 7: ft_sequence advances by 7 per record

@@ -22,7 +22,7 @@ def test_user_sweep_script_test_runs_against_the_simulated_rig(tmp_path):
             """
         )
     )
-    plugin = "ornitail.acquisition.pytest_plugin"
+    plugin = "ornitail.simulated_instruments.pytest_plugin"
     # once the package declares the pytest11 entry point pytest loads the plugin by itself;
     # naming it again with -p would register it twice
     registered = any(point.value == plugin for point in entry_points(group="pytest11"))

@@ -7,11 +7,13 @@ from pathlib import Path
 
 import pytest
 
+from ornitail.acquisition import actuator_backends
 from ornitail.acquisition.instrument_errors import InstrumentDisconnected
 from ornitail.acquisition.netcanoem_driver import NetCanOemDriver
 from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, read_rig_file
 from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
+from ornitail.calibration.hotwire_laws import KingsLaw
 from ornitail.core.errors import UserInputError
 
 DATA = DEFAULT_RIG_FILE.parent
@@ -122,6 +124,29 @@ def test_velocity_limit_beyond_the_tunnel_table_is_refused(tmp_path):
         UserInputError, match=r"\[limits\].velocity_m_s: 0..9 m/s is not inside the tunnel table"
     ):
         Rig.from_file(path)
+
+
+def test_a_simulated_rig_without_simulated_instruments_installed_is_one_line(tmp_path, monkeypatch):
+    path = write_rig(tmp_path)
+    monkeypatch.setattr(actuator_backends, "installed_entry_points", lambda: [])
+    with pytest.raises(UserInputError) as caught:
+        Rig.from_file(path)
+    assert caught.value.where == f"{path}: [rig].simulated"
+    assert caught.value.problem.startswith(
+        "the simulated instruments ('simulated') are not installed"
+    )
+    assert "'rig.simulated' in the group 'ornitail.instruments'" in caught.value.problem
+
+
+def test_the_rig_file_chooses_the_simulation_and_its_hot_wire_law(tmp_path):
+    (tmp_path / "real").mkdir()
+    simulated = Rig.from_file(write_rig(tmp_path))
+    law = simulated.hotwire_law()
+    assert isinstance(law, KingsLaw) and (law.a_v2, law.b, law.exponent_n) == (2.0, 1.2, 0.45)
+    real = Rig.from_file(write_rig(tmp_path / "real", {"simulated = true": "simulated = false"}))
+    assert real.hotwire_law() is None
+    real.start_simulation()  # nothing to reach
+    assert real.simulators is None and real.time_scale == 1.0
 
 
 def wait_for(predicate, timeout_s: float = 10.0):

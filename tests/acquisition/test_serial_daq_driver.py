@@ -8,8 +8,8 @@ import pytest
 from ornitail.acquisition.daq_protocol import CHANNEL_NAMES, VOLTS_PER_COUNT
 from ornitail.acquisition.instrument_errors import InstrumentDisconnected, InstrumentReplyError
 from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
-from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
 from ornitail.core.errors import UserInputError
+from ornitail.simulated_instruments.shared_signal_source import SharedTunnelSignals
 
 
 @pytest.fixture

@@ -15,11 +15,11 @@ import math
 import pytest
 
 from ornitail.acquisition.instrument_errors import InstrumentDisconnected, InstrumentReplyError
-from ornitail.acquisition.simulated_zaber_strut import SIMULATED_DEVICE_ID, SimulatedZaberStrut
 from ornitail.acquisition.zaber_ascii import parse_reply
 from ornitail.acquisition.zaber_strut_driver import ZaberAsciiStrut, ZaberStrutSettings
 from ornitail.core.errors import UserInputError
 from ornitail.core.toml_table import TomlTable
+from ornitail.simulated_instruments.zaber_strut import SIMULATED_DEVICE_ID, SimulatedZaberStrut
 
 SETTINGS = ZaberStrutSettings(
     device=1, axis=1, counts_per_deg=2000.0, pitch_at_zero_counts_deg=-10.0

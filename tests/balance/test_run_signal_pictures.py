@@ -19,10 +19,10 @@ from ornitail.acquisition.recording_reader import load_recording
 from ornitail.app.cli import main
 from ornitail.balance.run_signal_plots import binned, run_signals, run_signals_figure
 from ornitail.calibration.signal_channels import TUNNEL_SIGNAL_CHANNELS
+from ornitail.simulated_instruments.rig_instruments import simulated_hotwire_law
 
 REPOSITORY = Path(__file__).resolve().parents[2]
 CALIBRATION_FILE = REPOSITORY / "tests" / "data" / "calibration" / "FT8884.cal"
-HOTWIRE_LAW = REPOSITORY / "gui" / "data" / "simulated_hotwire.toml"
 RATE_HZ = 2000.0
 FLAP_HZ = 12.0
 
@@ -110,10 +110,8 @@ def test_the_figure_labels_every_quantity_with_its_unit(recorded_run):
 
 
 def test_a_hotwire_law_draws_the_hot_wire_in_metres_per_second(recorded_run, tmp_path):
-    from ornitail.calibration.hotwire_laws import load_hotwire_law
-
     _, run_directory = recorded_run
-    signals = run_signals(load_recording(run_directory), hotwire_law=load_hotwire_law(HOTWIRE_LAW))
+    signals = run_signals(load_recording(run_directory), hotwire_law=simulated_hotwire_law())
     figure = run_signals_figure(signals)
     assert "hot-wire velocity" in figure.axes[2].get_legend_handles_labels()[1]
     assert "hot-wire bridge (V)" not in [axis.get_ylabel() for axis in figure.axes]

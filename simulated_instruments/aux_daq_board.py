@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
-from ornitail.acquisition.simulated_clock import SimulatedClock
-from ornitail.acquisition.simulated_daq_board import SimulatedDaqBoard
+from ornitail.simulated_instruments.clock import SimulatedClock
+from ornitail.simulated_instruments.daq_board import SimulatedDaqBoard
+from ornitail.simulated_instruments.shared_signal_source import SharedTunnelSignals
 
 DEFAULT_RATE_ERROR_PPM = 80.0
 """The simulated crystal's error: a common 50 ppm part at the edge of its temperature range."""

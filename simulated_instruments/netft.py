@@ -27,7 +27,7 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 import numpy as np
 
 from ornitail.acquisition import netft_protocol as protocol
-from ornitail.acquisition.simulated_device import SimulatedDevice
+from ornitail.simulated_instruments.device import SimulatedDevice
 
 LoadFunction = Callable[[np.ndarray], np.ndarray]
 """(n,) device times, s -> (n, 6) Fx Fy Fz in N and Tx Ty Tz in N m."""

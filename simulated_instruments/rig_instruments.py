@@ -1,5 +1,8 @@
 """Starts the simulated instruments a rig file names, each on a real transport (ptys, virtual CAN).
 
+:class:`SimulatedRigInstruments` is the simulation backend ``simulated`` of the rig (``[rig].simulated = true``;
+entry point ``rig.simulated`` in the group ``ornitail.instruments``, :mod:`ornitail.acquisition.rig_simulation`).
+
 All share one :class:`SimulatedClock` (so one time scale) and one :class:`SharedTunnelSignals`:
 the fan, strut and motor set its operating point, the balance (DAQ board, NETCANOEM or Net F/T) reads it, so
 every balance measures the same simulated vehicle.
@@ -13,6 +16,7 @@ from __future__ import annotations
 import uuid
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -20,32 +24,42 @@ from ornitail.acquisition.fan_speed_map import FanSpeedMap
 from ornitail.acquisition.modbus_vfd_driver import MODBUS_VFD
 from ornitail.acquisition.orni_line_backends import ORNI_LINE
 from ornitail.acquisition.rig_file import RigDescription
-from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
-from ornitail.acquisition.simulated_actuators import (
+from ornitail.acquisition.rig_simulation import RigSimulation
+from ornitail.acquisition.zaber_strut_driver import ZABER_ASCII
+from ornitail.calibration.ati_calibration import AtiCalibration
+from ornitail.calibration.hotwire_laws import HotwireLaw, load_hotwire_law
+from ornitail.calibration.tunnel_table import TunnelVelocityTable
+from ornitail.sim.configuration import study_configuration
+from ornitail.simulated_instruments.actuators import (
     SimulatedFlappingMotor,
     SimulatedStrutActuator,
     SimulatedTunnelFan,
 )
-from ornitail.acquisition.simulated_aux_daq_board import SimulatedAuxDaqBoard
-from ornitail.acquisition.simulated_clock import SimulatedClock
-from ornitail.acquisition.simulated_daq_board import SimulatedDaqBoard
-from ornitail.acquisition.simulated_device import SimulatedDevice
-from ornitail.acquisition.simulated_modbus_vfd import SimulatedModbusVfd
-from ornitail.acquisition.simulated_netcanoem_board import SimulatedNetCanOemBoard
-from ornitail.acquisition.simulated_netft import SimulatedNetFt
-from ornitail.acquisition.simulated_zaber_strut import SimulatedZaberStrut
-from ornitail.acquisition.zaber_strut_driver import ZABER_ASCII
-from ornitail.calibration.ati_calibration import AtiCalibration
-from ornitail.calibration.tunnel_table import TunnelVelocityTable
+from ornitail.simulated_instruments.aux_daq_board import SimulatedAuxDaqBoard
+from ornitail.simulated_instruments.clock import SimulatedClock
+from ornitail.simulated_instruments.daq_board import SimulatedDaqBoard
+from ornitail.simulated_instruments.device import SimulatedDevice
+from ornitail.simulated_instruments.modbus_vfd import SimulatedModbusVfd
+from ornitail.simulated_instruments.netcanoem_board import SimulatedNetCanOemBoard
+from ornitail.simulated_instruments.netft import SimulatedNetFt
+from ornitail.simulated_instruments.shared_signal_source import SharedTunnelSignals
+from ornitail.simulated_instruments.zaber_strut import SimulatedZaberStrut
 
 SIMULATION_SAMPLE_RATE_HZ = 10_000.0
 NETFT_RATE_ERROR_PPM = -40.0
 """The simulated Net F/T's crystal: 40 ppm slow (the auxiliary board's runs 80 ppm fast), so that aligning the two
 needs both counter models."""
+HOTWIRE_LAW_FILE = Path(__file__).parent / "data" / "hotwire_law.toml"
+"""King's law of the simulated hot-wire (the simulator's own, :mod:`ornitail.sim.instruments`)."""
+
+
+def simulated_hotwire_law() -> HotwireLaw:
+    """The law of the simulated rig's hot-wire."""
+    return load_hotwire_law(HOTWIRE_LAW_FILE)
 
 
 @dataclass
-class SimulatedRigInstruments:
+class SimulatedRigInstruments(RigSimulation):
     """The running simulators of one rig; ``daq_board``, ``netcanoem_board`` or ``netft`` is None by route, an
     actuator's simulator None when its backend has none here (a third party's)."""
 
@@ -139,10 +153,49 @@ class SimulatedRigInstruments:
             netft,
         )
 
-    def actuator_ports(self) -> dict[str, str]:
-        """The pty of each actuator that has a simulator, by role (``{"fan": "/dev/pts/5", ...}``)."""
-        simulators = {"fan": self.fan, "strut": self.strut, "motor": self.motor}
+    @classmethod
+    def hotwire_law(cls) -> HotwireLaw:
+        """The law of the simulated hot-wire."""
+        return simulated_hotwire_law()
+
+    @property
+    def time_scale(self) -> float:
+        """Rig seconds per wall second (the shared clock's)."""
+        return self.clock.time_scale
+
+    def now_s(self) -> float:
+        """Rig time, s: the shared simulated clock."""
+        return self.clock.now_s()
+
+    def ports(self) -> dict[str, str]:
+        """The pty of each simulator on a serial port, by role (``{"fan": "/dev/pts/5", ..., "daq": ...}``)."""
+        simulators = {
+            "fan": self.fan,
+            "strut": self.strut,
+            "motor": self.motor,
+            "daq": self.daq_board,
+            "aux_daq": self.aux_daq_board,
+        }
         return {role: sim.port_path for role, sim in simulators.items() if sim is not None}
+
+    def can_bus(self) -> tuple[str, str] | None:
+        """python-can's virtual bus on the simulated NETCANOEM's channel (whatever ``[balance.can]`` says), or
+        None when the rig has no CAN balance."""
+        return None if self.can_channel is None else ("virtual", self.can_channel)
+
+    def netft_address(self) -> tuple[str, int, int] | None:
+        """The simulated Net F/T's loopback address, if the rig has one."""
+        if self.netft is None:
+            return None
+        return self.netft.host, self.netft.rdt_port, self.netft.http_port
+
+    def mount_vehicle(self, tail_id: str, x_h_m: float) -> None:
+        """Put the study's vehicle with tail ``tail_id`` at ``x_h_m`` (m) on the simulated balance."""
+        self.signals.mount_vehicle(study_configuration(tail_id, x_h_m * 1000.0))
+
+    def set_tail_attached(self, tail_attached: bool) -> None:
+        """Fit or remove the simulated vehicle's tail."""
+        self.signals.set_operating_point(tail_attached=tail_attached)
 
     def close(self) -> None:
         """Stop every simulator."""

@@ -21,9 +21,9 @@ import can
 import numpy as np
 
 from ornitail.acquisition import netcanoem_protocol as protocol
-from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
-from ornitail.acquisition.simulated_clock import SimulatedClock
-from ornitail.acquisition.simulated_device import SimulatedDevice
+from ornitail.simulated_instruments.clock import SimulatedClock
+from ornitail.simulated_instruments.device import SimulatedDevice
+from ornitail.simulated_instruments.shared_signal_source import SharedTunnelSignals
 
 GAUGE_VOLTS_PER_COUNT = 10.24 / 32768.0
 COUNTS_PER_FORCE = 1_000_000  # counts per N

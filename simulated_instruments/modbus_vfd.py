@@ -25,11 +25,11 @@ from ornitail.acquisition.modbus_rtu import (
     request_length,
 )
 from ornitail.acquisition.modbus_vfd_driver import ModbusVfdSettings
-from ornitail.acquisition.pty_transport import PseudoTerminalPair
-from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
-from ornitail.acquisition.simulated_clock import SimulatedClock
-from ornitail.acquisition.simulated_device import SimulatedDevice
-from ornitail.acquisition.simulated_line_instrument import first_order_step
+from ornitail.simulated_instruments.clock import SimulatedClock
+from ornitail.simulated_instruments.device import SimulatedDevice
+from ornitail.simulated_instruments.line_instrument import first_order_step
+from ornitail.simulated_instruments.pty_transport import PseudoTerminalPair
+from ornitail.simulated_instruments.shared_signal_source import SharedTunnelSignals
 
 ILLEGAL_FUNCTION, ILLEGAL_DATA_ADDRESS, ILLEGAL_DATA_VALUE = 0x01, 0x02, 0x03
 

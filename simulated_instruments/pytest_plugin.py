@@ -33,19 +33,19 @@ import pytest
 
 from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE
-from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
-from ornitail.acquisition.simulated_actuators import (
+from ornitail.calibration.ati_calibration import AtiCalibration
+from ornitail.calibration.tunnel_table import TunnelVelocityTable
+from ornitail.simulated_instruments.actuators import (
     SimulatedFlappingMotor,
     SimulatedStrutActuator,
     SimulatedTunnelFan,
 )
-from ornitail.acquisition.simulated_clock import SimulatedClock
-from ornitail.acquisition.simulated_daq_board import SimulatedDaqBoard
-from ornitail.acquisition.simulated_netcanoem_board import SimulatedNetCanOemBoard
-from ornitail.calibration.ati_calibration import AtiCalibration
-from ornitail.calibration.tunnel_table import TunnelVelocityTable
+from ornitail.simulated_instruments.clock import SimulatedClock
+from ornitail.simulated_instruments.daq_board import SimulatedDaqBoard
+from ornitail.simulated_instruments.netcanoem_board import SimulatedNetCanOemBoard
+from ornitail.simulated_instruments.shared_signal_source import SharedTunnelSignals
 
-PACKAGED_DATA = Path(__file__).parent / "data"
+PACKAGED_DATA = DEFAULT_RIG_FILE.parent
 PACKAGED_CALIBRATION = PACKAGED_DATA / "calibration" / "FT8884.cal"
 PACKAGED_TUNNEL_TABLE = PACKAGED_DATA / "tunnel_table.csv"
 

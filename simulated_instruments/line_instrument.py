@@ -10,9 +10,9 @@ from __future__ import annotations
 import math
 import threading
 
-from ornitail.acquisition.pty_transport import PseudoTerminalPair
-from ornitail.acquisition.simulated_clock import SimulatedClock
-from ornitail.acquisition.simulated_device import SimulatedDevice
+from ornitail.simulated_instruments.clock import SimulatedClock
+from ornitail.simulated_instruments.device import SimulatedDevice
+from ornitail.simulated_instruments.pty_transport import PseudoTerminalPair
 
 
 def first_order_step(

@@ -1,6 +1,6 @@
 """Simulated fan controller, strut pitch actuator and flapping motor, driving the tunnel simulator.
 
-Each runs behind its own pty (see :mod:`simulated_line_instrument`) and, as its state changes, sets
+Each runs behind its own pty (see :mod:`line_instrument`) and, as its state changes, sets
 the shared tunnel signal source's operating point: fan rpm -> tunnel velocity through the tunnel
 table; strut angle -> pitch; motor rpm -> flapping frequency = rpm / 60 / gear ratio.
 """
@@ -10,10 +10,10 @@ from __future__ import annotations
 import math
 
 from ornitail.acquisition.fan_speed_map import FanSpeedMap
-from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
-from ornitail.acquisition.simulated_clock import SimulatedClock
-from ornitail.acquisition.simulated_line_instrument import SimulatedLineInstrument, first_order_step
 from ornitail.calibration.tunnel_table import TunnelVelocityTable
+from ornitail.simulated_instruments.clock import SimulatedClock
+from ornitail.simulated_instruments.line_instrument import SimulatedLineInstrument, first_order_step
+from ornitail.simulated_instruments.shared_signal_source import SharedTunnelSignals
 from ornitail.vehicle.constants import DELFLY_GEAR_RATIO
 
 

@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import math
 
-from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
-from ornitail.acquisition.simulated_clock import SimulatedClock
-from ornitail.acquisition.simulated_line_instrument import SimulatedLineInstrument, first_order_step
 from ornitail.acquisition.zaber_strut_driver import ZaberStrutSettings
+from ornitail.simulated_instruments.clock import SimulatedClock
+from ornitail.simulated_instruments.line_instrument import SimulatedLineInstrument, first_order_step
+from ornitail.simulated_instruments.shared_signal_source import SharedTunnelSignals
 
 SIMULATED_DEVICE_ID = 30222
 """The ``device.id`` this simulator reports (a made-up product id)."""

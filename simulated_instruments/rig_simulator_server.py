@@ -2,7 +2,7 @@
 
 Run it as::
 
-    python -m ornitail.acquisition.rig_simulator_server --directory DIR [--rig RIG.toml] [--time-scale 5]
+    python -m ornitail.simulated_instruments.rig_simulator_server --directory DIR [--rig RIG.toml] [--time-scale 5]
 
 It starts the simulated fan, strut, motor and ORNI-DAQ9 board of a simulated rig file (default: the packaged one,
 serial DAQ route) on ptys, writes ``DIR/rig.toml`` (a rig file whose ports are those ptys and whose
@@ -25,7 +25,9 @@ Control: a Unix socket; each request is one JSON object on a line, each reply on
   ``simulator_control`` sends these itself);
 - ``shutdown``.
 
-:class:`SimulatorControl` is the client.
+:class:`SimulatorControl` is the client; :class:`ServedRigInstruments`, built on it, is the rig's simulation backend
+``simulator_server`` (``[rig].simulator_control``; entry point ``rig.simulator_server`` in the group
+``ornitail.instruments``).
 """
 
 from __future__ import annotations
@@ -46,12 +48,18 @@ from pathlib import Path
 from typing import Any
 
 from ornitail.acquisition.instrument_errors import InstrumentDisconnected
-from ornitail.acquisition.pty_transport import PseudoTerminalPair
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, RigDescription, read_rig_file
-from ornitail.acquisition.simulated_rig_instruments import SimulatedRigInstruments
+from ornitail.acquisition.rig_simulation import RigSimulation
 from ornitail.calibration.ati_calibration import AtiCalibration
+from ornitail.calibration.hotwire_laws import HotwireLaw
 from ornitail.calibration.tunnel_table import TunnelVelocityTable
 from ornitail.core.errors import UserInputError
+from ornitail.sim.configuration import study_configuration
+from ornitail.simulated_instruments.pty_transport import PseudoTerminalPair
+from ornitail.simulated_instruments.rig_instruments import (
+    SimulatedRigInstruments,
+    simulated_hotwire_law,
+)
 
 INSTRUMENTS = ("fan", "strut", "motor", "daq")
 SAFE_COMMANDS = {"fan": "STOP", "strut": "HALT", "motor": "OFF"}
@@ -210,12 +218,10 @@ class RigSimulatorServer:
             else:
                 self._ptys[name].stalled.clear()
         elif command == "mount":
-            from ornitail.sim.configuration import study_configuration
-
             configuration = study_configuration(str(request["tail_id"]), float(request["x_h_mm"]))
             self.instruments.signals.mount_vehicle(configuration)
         elif command == "tail":
-            self.instruments.signals.set_operating_point(tail_attached=bool(request["attached"]))
+            self.instruments.set_tail_attached(bool(request["attached"]))
         elif command == "shutdown":
             self.stopped.set()
         else:
@@ -273,7 +279,7 @@ class RigSimulatorServer:
 
         return "\n".join(
             [
-                "# Written by python -m ornitail.acquisition.rig_simulator_server "
+                "# Written by python -m ornitail.simulated_instruments.rig_simulator_server "
                 f"(pid {os.getpid()}): simulated instruments on ptys. Format: docs/rig-file.md",
                 "[rig]",
                 f"name = {toml(description.name + ' (simulator server)')}",
@@ -373,6 +379,54 @@ class SimulatorControl:
     def state(self) -> dict[str, Any]:
         """The instruments' state (see the module docstring)."""
         return self.request("state")
+
+
+class ServedRigInstruments(RigSimulation):
+    """The simulated instruments a :class:`RigSimulatorServer` serves, reached through its control socket: the
+    rig file already names their ptys, rig time runs at the server's time scale, the vehicle changes by request."""
+
+    def __init__(self, control: SimulatorControl, time_scale: float) -> None:
+        self.control = control
+        self._time_scale = time_scale
+
+    @classmethod
+    def start(
+        cls,
+        description: RigDescription,
+        calibration: AtiCalibration,
+        tunnel_table: TunnelVelocityTable,
+    ) -> ServedRigInstruments:
+        """Ask the server of ``[rig].simulator_control`` for its time scale.
+
+        Raises
+        ------
+        InstrumentDisconnected
+            The control socket does not answer.
+        """
+        assert description.simulator_control is not None  # this backend is chosen by it
+        control = SimulatorControl(description.simulator_control)
+        return cls(control, float(control.state()["time_scale"]))
+
+    @classmethod
+    def hotwire_law(cls) -> HotwireLaw:
+        """The law of the simulated hot-wire (the server runs the same simulator)."""
+        return simulated_hotwire_law()
+
+    @property
+    def time_scale(self) -> float:
+        """The server's time scale."""
+        return self._time_scale
+
+    def mount_vehicle(self, tail_id: str, x_h_m: float) -> None:
+        """Ask the server to mount the vehicle with tail ``tail_id`` at ``x_h_m`` (m)."""
+        self.control.request("mount", tail_id=tail_id, x_h_mm=x_h_m * 1000.0)
+
+    def set_tail_attached(self, tail_attached: bool) -> None:
+        """Ask the server to fit or remove the tail."""
+        self.control.request("tail", attached=tail_attached)
+
+    def close(self) -> None:
+        """Nothing to stop: the server and its instruments outlive the rig, as hardware does."""
 
 
 def _control_path(directory: Path) -> Path:

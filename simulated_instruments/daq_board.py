@@ -38,10 +38,10 @@ from ornitail.acquisition.daq_protocol import (
     format_identity,
     link_ceiling_frames_per_s,
 )
-from ornitail.acquisition.pty_transport import PseudoTerminalPair
-from ornitail.acquisition.shared_signal_source import SharedTunnelSignals
-from ornitail.acquisition.simulated_clock import SimulatedClock
-from ornitail.acquisition.simulated_device import SimulatedDevice
+from ornitail.simulated_instruments.clock import SimulatedClock
+from ornitail.simulated_instruments.device import SimulatedDevice
+from ornitail.simulated_instruments.pty_transport import PseudoTerminalPair
+from ornitail.simulated_instruments.shared_signal_source import SharedTunnelSignals
 
 HALL_THRESHOLD_V = 1.65  # half of the 3.3 V logic level of the Hall sensor
 HALL_HIGH_V = 3.3
