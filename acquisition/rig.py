@@ -424,15 +424,19 @@ class Rig:
     def start_balance(self, sample_rate_hz: float | None = None) -> None:
         """Start the balance stream at ``sample_rate_hz`` (default: the rig file's rate of its route)."""
         balance = self._connected(self.balance)
+        before_start_s = self.now_s()
         rate_hz = balance.start_stream(sample_rate_hz or self.description.balance_sample_rate_hz())
-        self._balance_clock = (self.now_s(), float(rate_hz))
+        self._balance_clock = (before_start_s, float(rate_hz))
 
     def balance_samples_since_start(self) -> int:
         """Samples the balance has taken since its stream started, from the rig time since then.
 
-        Rig time read after START was answered is at or after the board's first sample, so this never
-        undercounts (crystal drift: ~50 ppm). It lets a sweep pick rows by when they were sampled, not by
-        when they reached the host through the transport's buffers.
+        The rig time is read before START is sent, so at or before the board's first sample: this count never
+        falls short of the board's (crystal drift aside: ~50 ppm), and rows picked from it were sampled now or
+        later. Read after START was answered, a slow answer (a loaded host) made records begin that much before
+        the point settled: on a simulated rig at 15 x, a 0.4 s stall put a motor spin-up into a record. It lets
+        a sweep pick rows by when they were sampled, not by when they reached the host through the transport's
+        buffers.
         """
         if self._balance_clock is None:
             raise RuntimeError("the balance is not streaming: start_balance() first")

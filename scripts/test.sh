@@ -1,7 +1,40 @@
 #!/usr/bin/env bash
-# Set up (if needed) and run the whole test suite, offscreen.
+# Set up (if needed) and run the test suite, offscreen.
+#
+# With no arguments, the whole suite in two phases (tests/conftest.py, --ornitail-phase):
+#   1. the tests that drive no simulated rig, on two pytest-xdist workers (one per core), while `ornitail demo`
+#      records in the background (it mostly waits on its simulated rig);
+#   2. the tests that drive a simulated rig, one at a time in one process (the sweep tests count samples exactly
+#      and are kept off a loaded host), the demo's test first: it reads what the demo printed, so no rig streams
+#      beside the demo's.
+# With arguments, pytest with those arguments (one process).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
 export QT_QPA_PLATFORM=offscreen
 export PYQTGRAPH_QT_LIB=PySide6
-exec .venv/bin/python -m pytest "$@"
+if [ $# -gt 0 ]; then
+  exec .venv/bin/python -m pytest "$@"
+fi
+
+demo_folder="$(mktemp -d -t ornitail-demo-XXXXXX)"
+(
+  .venv/bin/ornitail demo --data-root "$demo_folder/data" --json >"$demo_folder/stdout" 2>"$demo_folder/stderr"
+  echo $? >"$demo_folder/returncode"
+) &
+demo_job=$!
+cleanup() {
+  kill "$demo_job" 2>/dev/null || true
+  pkill -f -- "--data-root $demo_folder/data" 2>/dev/null || true
+  rm -rf "$demo_folder"
+}
+trap cleanup EXIT
+export ORNITAIL_TEST_DEMO_FOLDER="$demo_folder"
+
+no_rig_status=0
+.venv/bin/python -m pytest --ornitail-phase=no-rig -n 2 --dist loadfile || no_rig_status=$?
+rig_status=0
+.venv/bin/python -m pytest --ornitail-phase=rig || rig_status=$?
+if [ "$no_rig_status" -ne 0 ]; then
+  exit "$no_rig_status"
+fi
+exit "$rig_status"

@@ -10,10 +10,16 @@ the process with exit status 1. The same watchdog covers interpreter shutdown (t
 `ornitail demo` (tests/test_demo.py) spends about two minutes mostly waiting on its simulated rig (the fan spinning
 up and down around 27 wind-off tares; a quarter of one core). When the session holds the demo's test, the demo is
 started as its own process when collection ends, and the tests that drive no simulated rig (simulator, flight,
-design, gap, calibration, the bad-input corpus) run first, while it records; the demo's test then only reads what
-it printed. Tests that drive a simulated rig run after those, so at most one rig streams at a time (the sweep tests
-count samples exactly and are kept off a loaded link). The demo retakes a record that lost samples, so a busy
+design, gap, calibration, balance processing of simulated signals, the bad-input corpus) run first, while it
+records; the demo's test then only reads what it printed. Tests that drive a simulated rig run after those, so at
+most one rig streams at a time (the sweep tests count samples exactly and are kept off a loaded link). The demo
+retakes a record that lost samples, so a busy
 neighbour cannot change its results, only its duration.
+
+The whole suite (``bash scripts/test.sh`` without arguments) runs in two pytest sessions chosen by
+``--ornitail-phase``: ``no-rig`` (on two xdist workers) and then ``rig`` (one process, the demo's test first). The
+script starts the demo itself and names its folder in ``ORNITAIL_TEST_DEMO_FOLDER`` (``stdout``, ``stderr`` and,
+when it has ended, ``returncode``); the demo's test reads it there instead of starting one.
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import pytest
@@ -36,7 +43,8 @@ SHUTDOWN_DEADLINE_S = 120.0
 DEMO_TEST_FILE = "tests/test_demo.py"
 RIG_BOUND_PATHS = (
     "tests/acquisition/",
-    "tests/balance/",
+    "tests/balance/test_portable_runs.py",
+    "tests/balance/test_process_cli.py",
     "tests/gui/",
     "tests/benchmarks/",
     "tests/gap/test_tunnel_recordings.py",
@@ -44,6 +52,11 @@ RIG_BOUND_PATHS = (
 )
 """Tests that drive a simulated rig or stream through a transport at rate (run after the others)."""
 RIG_FIXTURES = {"simulated_rig", "simulated_daq", "simulated_netcanoem", "simulated_netft"}
+PHASES = ("all", "no-rig", "rig")
+"""``--ornitail-phase``: every test, those that drive no simulated rig, or those that do."""
+EXTERNAL_DEMO_VARIABLE = "ORNITAIL_TEST_DEMO_FOLDER"
+EXTERNAL_DEMO_POLL_S = 0.5
+"""How often the demo's test looks for the externally started demo's return code, s (a deadline wait)."""
 
 _terminal_fd: int | None = None
 
@@ -81,7 +94,44 @@ class BackgroundDemo:
         shutil.rmtree(self.folder, ignore_errors=True)
 
 
-_background_demo: BackgroundDemo | None = None
+class ExternalDemo:
+    """`ornitail demo --json` started by scripts/test.sh before the first phase, read from its folder."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+
+    def result(self, timeout_s: float) -> tuple[int, str, str]:
+        """Exit code, standard output and standard error, waiting up to ``timeout_s`` for the demo to end."""
+        returncode_file = self.folder / "returncode"
+        deadline = time.monotonic() + timeout_s
+        while not returncode_file.exists():
+            if time.monotonic() > deadline:
+                raise TimeoutError(f"the demo in {self.folder} did not end within {timeout_s:g} s")
+            time.sleep(EXTERNAL_DEMO_POLL_S)
+        returncode = returncode_file.read_text().strip()
+        while not returncode:  # written but not yet flushed
+            time.sleep(EXTERNAL_DEMO_POLL_S)
+            returncode = returncode_file.read_text().strip()
+        return (
+            int(returncode),
+            (self.folder / "stdout").read_text(),
+            (self.folder / "stderr").read_text(),
+        )
+
+    def close(self) -> None:
+        """scripts/test.sh removes the folder."""
+
+
+_background_demo: BackgroundDemo | ExternalDemo | None = None
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption(
+        "--ornitail-phase",
+        choices=PHASES,
+        default="all",
+        help="run every test (all), only those that drive no simulated rig (no-rig) or only those that do (rig)",
+    )
 
 
 def _drives_a_rig(item: pytest.Item) -> bool:
@@ -90,21 +140,36 @@ def _drives_a_rig(item: pytest.Item) -> bool:
     )
 
 
+def _is_the_demo(item: pytest.Item) -> bool:
+    return item.nodeid.startswith(DEMO_TEST_FILE)
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Tests that drive no simulated rig first (the demo records meanwhile), in their usual order otherwise."""
-    items.sort(key=_drives_a_rig)
+    """Only the phase's tests; those that drive no simulated rig first (the demo records meanwhile), in their
+    usual order otherwise; in the rig phase the demo's test first (no rig streams beside the demo's)."""
+    phase = config.getoption("--ornitail-phase")
+    if phase != "all":
+        wanted = phase == "rig"
+        deselected = [item for item in items if _drives_a_rig(item) != wanted]
+        if deselected:
+            config.hook.pytest_deselected(items=deselected)
+            items[:] = [item for item in items if _drives_a_rig(item) == wanted]
+    if phase == "rig":
+        items.sort(key=lambda item: not _is_the_demo(item))
+    else:
+        items.sort(key=_drives_a_rig)
 
 
 def pytest_collection_finish(session: pytest.Session) -> None:
     global _background_demo
-    if not session.config.option.collectonly and any(
-        item.nodeid.startswith(DEMO_TEST_FILE) for item in session.items
-    ):
-        _background_demo = BackgroundDemo()
+    if session.config.option.collectonly or not any(_is_the_demo(i) for i in session.items):
+        return
+    external = os.environ.get(EXTERNAL_DEMO_VARIABLE)
+    _background_demo = ExternalDemo(Path(external)) if external else BackgroundDemo()
 
 
 @pytest.fixture(scope="session")
-def background_demo() -> BackgroundDemo:
+def background_demo() -> BackgroundDemo | ExternalDemo:
     """The demo started when collection ended (see the module notes)."""
     assert _background_demo is not None, "the demo starts only when its test file is collected"
     return _background_demo
