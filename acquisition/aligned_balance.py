@@ -42,6 +42,7 @@ from ornitail.acquisition.aux_clock_model import ClockFit, CounterClockModel, Co
 from ornitail.acquisition.balance_interface import (
     BalanceBlock,
     BalanceStream,
+    CheckedDevice,
     LinkCounts,
     TimedGaugeBalance,
 )
@@ -124,6 +125,10 @@ class AlignedBalance(BalanceStream):
             self.balance.close()
             raise
         return f"{self.balance.name} {serial_number}; {identity.model} {identity.serial_number}"
+
+    def checked_devices(self) -> tuple[CheckedDevice, ...]:
+        """The gauge balance and the auxiliary board: two devices, each checked on its own."""
+        return (*self.balance.checked_devices(), *self.aux.checked_devices())
 
     def close(self) -> None:
         """Close both; the balance's error (if any) is raised after the board was closed."""

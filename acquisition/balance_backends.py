@@ -53,6 +53,7 @@ def _serial_daq(context: BalanceContext) -> BalanceStream:
         context.ports["daq"],
         baud=description.serial_daq.baud,
         reply_timeout_s=context.reply_timeout_s,
+        check_sample_rate_hz=description.serial_daq.sample_rate_hz,
     )
 
 
@@ -78,6 +79,8 @@ def _with_aux_board(
         name="auxiliary board",
         reply_timeout_s=context.reply_timeout_s,
         clock=context.clock,
+        rig_file_key="[balance.aux_daq].port",
+        check_sample_rate_hz=aux_settings.sample_rate_hz,
     )
     return AlignedBalance(
         balance,

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from ornitail.acquisition.actuator_interfaces import Reading
 from ornitail.calibration.signal_channels import GAUGE_CHANNELS
 
 
@@ -44,6 +45,38 @@ class LinkCounts:
     garbage_bytes: int = 0
     resyncs: int = 0
     foreign_frames: int = 0
+
+
+class CheckedDevice(ABC):
+    """One device behind a balance as ``ornitail rig check`` checks it, in a row of its own: identify it, read one
+    sample, leave it not streaming, close. Nothing is moved."""
+
+    name: str
+    """Instrument name used in messages and in the check's row."""
+    rig_file_key: str
+    """Where the rig file sets the device's route (``[balance.serial_daq].port``)."""
+
+    @property
+    @abstractmethod
+    def route(self) -> str:
+        """Where it is connected: a port path, ``interface:channel`` or ``udp:host:port``."""
+
+    @abstractmethod
+    def check_identity(self) -> tuple[str, str | None]:
+        """Open the device exclusively and identify it: its identity as text, and why it is not the model its driver
+        speaks (None when it is). Raises ``InstrumentError``; :meth:`close` is safe after it."""
+
+    @abstractmethod
+    def check_reading(self) -> Reading:
+        """One sample, keyed with its unit (``gauge_0_v``, ``fx_n``)."""
+
+    @abstractmethod
+    def safe_state(self) -> None:
+        """Not streaming."""
+
+    @abstractmethod
+    def close(self) -> None:
+        """Close; safe to call twice or after a failure."""
 
 
 class BalanceStream(ABC):
@@ -117,6 +150,10 @@ class BalanceStream(ABC):
         """What a recording stores about this stream beyond the rig file's route (empty: nothing more)."""
         return {}
 
+    @abstractmethod
+    def checked_devices(self) -> tuple[CheckedDevice, ...]:
+        """The devices behind the stream, each checked on its own by ``ornitail rig check`` (one row each)."""
+
 
 @dataclass
 class TimedGauges:
@@ -131,7 +168,7 @@ class TimedGauges:
     flagged: np.ndarray
 
 
-class TimedGaugeBalance(BalanceStream):
+class TimedGaugeBalance(BalanceStream, CheckedDevice):
     """A balance that carries only the six gauges and knows when, on the host clock, each sample was taken: what
     :class:`~ornitail.acquisition.aligned_balance.AlignedBalance` puts beside the auxiliary board (the NETCANOEM,
     stamped by its requests; the Net F/T, placed by a clock model of its own sample counter)."""
@@ -153,6 +190,10 @@ class TimedGaugeBalance(BalanceStream):
     def channel_names(self) -> tuple[str, ...]:
         """The six gauges."""
         return GAUGE_CHANNELS
+
+    def checked_devices(self) -> tuple[CheckedDevice, ...]:
+        """The balance itself: one device."""
+        return (self,)
 
     @abstractmethod
     def check_sample_rate(self, sample_rate_hz: float) -> None:

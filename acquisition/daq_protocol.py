@@ -29,6 +29,8 @@ ADC_COUNT_MAX = 32767
 ADC_RANGE_V = 10.24
 VOLTS_PER_COUNT = ADC_RANGE_V / 32768.0  # 0.3125 mV per count, int16 covers -10.24 .. +10.2397 V
 DEFAULT_BAUD = 4_000_000
+DEFAULT_SAMPLE_RATE_HZ = 10_000.0
+"""A board's rate when the rig file gives none, samples/s."""
 BITS_PER_BYTE_ON_WIRE = 10  # 8N1: start bit, 8 data bits, stop bit
 STOP_MARKER = b"OK STOPPED\n"
 MINIMUM_SAMPLE_RATE_HZ = 100.0

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ornitail.acquisition import netcanoem_protocol as protocol
+from ornitail.acquisition.actuator_interfaces import Reading
 from ornitail.acquisition.balance_interface import (
     BalanceBlock,
     LinkCounts,
@@ -57,6 +58,7 @@ class NetCanOemBalance(NetCanOemDriver, TimedGaugeBalance):
     """
 
     timing_method = "request time stamps"
+    rig_file_key = "[balance.can]"
 
     def __init__(self, *, calibration_matrix_si: np.ndarray, **driver_arguments) -> None:
         super().__init__(**driver_arguments)
@@ -153,3 +155,23 @@ class NetCanOemBalance(NetCanOemDriver, TimedGaugeBalance):
             raise RuntimeError(f"{self.name}: open() before adc_limits_v()")
         ones = np.ones(len(GAUGE_CHANNELS))
         return -32768 * self.volts_per_count * ones, 32767 * self.volts_per_count * ones
+
+    # -- rig check (CheckedDevice) ------------------------------------------------------------
+    @property
+    def route(self) -> str:
+        """``interface:channel``."""
+        return f"{self.interface}:{self.channel}"
+
+    def check_identity(self) -> tuple[str, str | None]:
+        """Serial number (:meth:`open`, which also compares the board's calibration) and firmware."""
+        serial_number = self.open()
+        return f"serial={serial_number} firmware={self.read_firmware_version()}", None
+
+    def check_reading(self) -> Reading:
+        """One polled gauge sample: the status word and the six gauges in counts (it is never left polling)."""
+        gauges = self.read_gauges()
+        reading: Reading = {"status_word": int(gauges.status_word)}
+        reading.update(
+            {f"gauge_{index}_counts": int(value) for index, value in enumerate(gauges.gauges)}
+        )
+        return reading

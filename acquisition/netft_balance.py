@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from ornitail.acquisition import netft_protocol as protocol
+from ornitail.acquisition.actuator_interfaces import Reading
 from ornitail.acquisition.aux_clock_model import CounterClockModel, CounterUnwrapper
 from ornitail.acquisition.balance_interface import (
     BalanceBlock,
@@ -52,6 +53,7 @@ class NetFtBalance(NetFtDriver, TimedGaugeBalance):
     """
 
     timing_method = "ft_sequence-to-host-time lower envelope"
+    rig_file_key = "[balance.netft]"
 
     def __init__(
         self,
@@ -186,3 +188,25 @@ class NetFtBalance(NetFtDriver, TimedGaugeBalance):
         flagged sample), V."""
         infinite = np.full(len(GAUGE_CHANNELS), np.inf)
         return -infinite, infinite
+
+    # -- rig check (CheckedDevice) ------------------------------------------------------------
+    @property
+    def route(self) -> str:
+        """``udp:host:rdt_port``."""
+        return f"udp:{self.address}"
+
+    def check_identity(self) -> tuple[str, str | None]:
+        """Counts per unit (rig file or ``netftapi2.xml``) and one RDT record (:meth:`open`)."""
+        return self.open(), None
+
+    def check_reading(self) -> Reading:
+        """One more RDT record: its status word and the wrench in N and N m (it is never left streaming)."""
+        record = self.read_record()
+        assert self.counts_per_unit is not None
+        wrench = self.counts_per_unit.to_si(record.counts)[0]
+        names = ("fx_n", "fy_n", "fz_n", "tx_n_m", "ty_n_m", "tz_n_m")
+        reading: Reading = {"status_word": int(record.status[0])}
+        reading.update(
+            {name: round(float(value), 6) for name, value in zip(names, wrench, strict=True)}
+        )
+        return reading

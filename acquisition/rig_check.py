@@ -11,7 +11,6 @@ other's commands). The result is plain data (:class:`RigCheck`); ``ornitail rig 
 from __future__ import annotations
 
 import sys
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,25 +18,12 @@ from pathlib import Path
 import can
 from serial.tools import list_ports
 
-from ornitail.acquisition.actuator_interfaces import Actuator
-from ornitail.acquisition.aligned_balance import AlignedBalance
-from ornitail.acquisition.balance_interface import BalanceStream
-from ornitail.acquisition.daq_protocol import CHANNEL_NAMES
-from ornitail.acquisition.instrument_errors import (
-    InstrumentDisconnected,
-    InstrumentError,
-    InstrumentInUse,
-)
-from ornitail.acquisition.netcanoem_driver import NetCanOemDriver
-from ornitail.acquisition.netft_balance import NetFtBalance
+from ornitail.acquisition.actuator_interfaces import Actuator, Reading
+from ornitail.acquisition.balance_interface import CheckedDevice
+from ornitail.acquisition.instrument_errors import InstrumentError, InstrumentInUse
 from ornitail.acquisition.rig import Rig
-from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
 
-FIRST_SAMPLE_TIMEOUT_S = 5.0
-"""How long the DAQ board may take to deliver its first sample after ``START``, s."""
 STATUS_OK, STATUS_FAILED, STATUS_IN_USE = "ok", "failed", "in_use"
-
-Reading = dict[str, float | int | bool]
 
 
 @dataclass(frozen=True)
@@ -181,24 +167,11 @@ def _start_simulation(rig: Rig) -> InstrumentCheck | None:
 
 
 def _check_instruments(rig: Rig) -> list[InstrumentCheck]:
+    """One row per device behind the balance (a gauge balance and the board beside it: one each), then the fan,
+    strut and motor."""
     fan, motor, strut, balance = rig.create_drivers()
-    description = rig.description
-    if isinstance(balance, SerialDaqDriver):
-        balance_checks = [_check_daq_board(balance, description.serial_daq.sample_rate_hz)]
-    elif isinstance(
-        balance, AlignedBalance
-    ):  # a gauge balance and the board beside it: one row each
-        assert description.aux_daq is not None
-        balance_checks = [
-            _check_gauge_balance(balance.balance),
-            _check_daq_board(
-                balance.aux, description.aux_daq.sample_rate_hz, "[balance.aux_daq].port"
-            ),
-        ]
-    else:
-        balance_checks = [_check_gauge_balance(balance)]
     return [
-        *balance_checks,
+        *(_check_balance_device(device) for device in balance.checked_devices()),
         _check_actuator(fan, "[fan].port"),
         _check_actuator(strut, "[strut].port"),
         _check_actuator(motor, "[motor].port"),
@@ -257,101 +230,21 @@ def identity_text(reply: str) -> str:
     return reply
 
 
-def _check_daq_board(
-    board: SerialDaqDriver, sample_rate_hz: float, key: str = "[balance.serial_daq].port"
-) -> InstrumentCheck:
-    """``STOP`` and ``ID?`` (the driver's open), the rig file's rate, one streamed sample, ``STOP``, close."""
+def _check_balance_device(device: CheckedDevice) -> InstrumentCheck:
+    """Open and identify (ORNI-DAQ9 ``ID?``, NETCANOEM serial number and firmware, Net F/T counts per unit), one
+    sample, not streaming, close; whatever the device, through the balance interface."""
+    key, route = device.rig_file_key, device.route
     try:
-        identity = board.open()
-    except InstrumentError as error:
-        return _refused(board.port, key, board.name, error)
-    try:
-        text = (
-            f"model={identity.model} serial={identity.serial_number} firmware={identity.firmware}"
-        )
-        if identity.model != board.model:
-            problem = f"{board.port} answers as {identity.model!r}, not {board.model}: is {key} the right port?"
+        try:
+            identity, problem = device.check_identity()
+        except InstrumentError as error:
+            return _refused(route, key, device.name, error)
+        if problem is not None:
             return InstrumentCheck(
-                board.name, key, board.port, STATUS_FAILED, text, problem=problem
+                device.name, key, route, STATUS_FAILED, identity, problem=problem
             )
-        reading, problem = _read_then_make_safe(
-            lambda: _first_daq_sample(board, sample_rate_hz), board.stop
-        )
-    finally:
-        board.close()
-    status = STATUS_FAILED if problem else STATUS_OK
-    return InstrumentCheck(board.name, key, board.port, status, text, reading, problem)
-
-
-def _first_daq_sample(board: SerialDaqDriver, sample_rate_hz: float) -> Reading:
-    board.set_sample_rate(sample_rate_hz)
-    board.start()
-    deadline = time.monotonic() + FIRST_SAMPLE_TIMEOUT_S
-    while time.monotonic() < deadline:
-        block = board.get_block(timeout_s=0.1)
-        if block is not None and len(block.counters):
-            volts = block.volts[0]
-            return {
-                "sample_rate_hz": float(board.sample_rate_hz or sample_rate_hz),
-                **{name: float(value) for name, value in zip(CHANNEL_NAMES, volts, strict=True)},
-            }
-    raise InstrumentDisconnected(
-        board.name, f"no sample within {FIRST_SAMPLE_TIMEOUT_S:g} s after START on {board.port}"
-    )
-
-
-def _check_gauge_balance(balance: BalanceStream) -> InstrumentCheck:
-    """The row of a gauge-only balance: the NETCANOEM or the Net F/T."""
-    if isinstance(balance, NetFtBalance):
-        return _check_netft(balance)
-    assert isinstance(balance, NetCanOemDriver)
-    return _check_netcanoem(balance)
-
-
-def _check_netft(device: NetFtBalance) -> InstrumentCheck:
-    """Counts per unit (rig file or ``netftapi2.xml``) and one RDT record (the driver's open), one more record in
-    N and N m, close (it is never left streaming)."""
-    key = "[balance.netft]"
-    route = f"udp:{device.address}"
-    try:
-        identity = device.open()
-    except InstrumentError as error:
-        return _refused(route, key, device.name, error)
-    try:
-        record = device.read_record()
-    except InstrumentError as error:
-        return InstrumentCheck(
-            device.name, key, route, STATUS_FAILED, identity, problem=error.problem
-        )
+        reading, problem = _read_then_make_safe(device.check_reading, device.safe_state)
     finally:
         device.close()
-    assert device.counts_per_unit is not None
-    wrench = device.counts_per_unit.to_si(record.counts)[0]
-    names = ("fx_n", "fy_n", "fz_n", "tx_n_m", "ty_n_m", "tz_n_m")
-    reading: Reading = {"status_word": int(record.status[0])}
-    reading.update(
-        {name: round(float(value), 6) for name, value in zip(names, wrench, strict=True)}
-    )
-    return InstrumentCheck(device.name, key, route, STATUS_OK, identity, reading)
-
-
-def _check_netcanoem(board: NetCanOemDriver) -> InstrumentCheck:
-    """Serial number (the driver's open) and firmware, one polled gauge sample, close (it is never left polling)."""
-    key = "[balance.can]"
-    route = f"{board.interface}:{board.channel}"
-    try:
-        serial_number = board.open()
-    except InstrumentError as error:
-        return _refused(route, key, board.name, error)
-    try:
-        identity = f"serial={serial_number} firmware={board.read_firmware_version()}"
-        gauges = board.read_gauges()
-    except InstrumentError as error:
-        return InstrumentCheck(board.name, key, route, STATUS_FAILED, problem=error.problem)
-    finally:
-        board.close()
-    reading: Reading = {"status_word": int(gauges.status_word)}
-    reading.update(
-        {f"gauge_{index}_counts": int(value) for index, value in enumerate(gauges.gauges)}
-    )
-    return InstrumentCheck(board.name, key, route, STATUS_OK, identity, reading)
+    status = STATUS_FAILED if problem else STATUS_OK
+    return InstrumentCheck(device.name, key, route, status, identity, reading, problem)

@@ -14,7 +14,11 @@ from typing import Any
 
 from ornitail.acquisition.actuator_backends import DEFAULT_BACKEND, backend_class
 from ornitail.acquisition.actuator_interfaces import Actuator
-from ornitail.acquisition.daq_protocol import DEFAULT_BAUD, link_ceiling_frames_per_s
+from ornitail.acquisition.daq_protocol import (
+    DEFAULT_BAUD,
+    DEFAULT_SAMPLE_RATE_HZ,
+    link_ceiling_frames_per_s,
+)
 from ornitail.acquisition.netcanoem_protocol import DEFAULT_BASE_ID, gauge_sample_rate_ceiling_hz
 from ornitail.acquisition.netft_driver import NetFtSettings, netft_settings_from_table
 from ornitail.acquisition.netft_protocol import INTERNAL_SAMPLE_RATE_HZ
@@ -232,7 +236,7 @@ def _aux_daq(
     settings = SerialDaqSettings(
         port=aux.text("port", "simulated" if simulated else REQUIRED),
         baud=aux.integer("baud", DEFAULT_BAUD, minimum=MIN_BAUD, maximum=MAX_BAUD),
-        sample_rate_hz=aux.number("sample_rate_hz", 10_000.0, positive=True),
+        sample_rate_hz=aux.number("sample_rate_hz", DEFAULT_SAMPLE_RATE_HZ, positive=True),
     )
     if settings.sample_rate_hz > link_ceiling_frames_per_s(settings.baud):
         raise UserInputError(
@@ -275,7 +279,7 @@ def read_rig_file(path: str | Path) -> RigDescription:
     serial_daq = SerialDaqSettings(
         port=daq.text("port", "simulated" if simulated or not needs_daq else REQUIRED),
         baud=daq.integer("baud", DEFAULT_BAUD, minimum=MIN_BAUD, maximum=MAX_BAUD),
-        sample_rate_hz=daq.number("sample_rate_hz", 10_000.0, positive=True),
+        sample_rate_hz=daq.number("sample_rate_hz", DEFAULT_SAMPLE_RATE_HZ, positive=True),
     )
     can_settings = CanSettings(
         interface=can.text("interface", "virtual" if simulated or not needs_can else REQUIRED),

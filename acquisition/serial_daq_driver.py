@@ -29,11 +29,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import serial
 
-from ornitail.acquisition.balance_interface import BalanceStream, LinkCounts
+from ornitail.acquisition.actuator_interfaces import Reading
+from ornitail.acquisition.balance_interface import BalanceStream, CheckedDevice, LinkCounts
 from ornitail.acquisition.daq_protocol import (
     ANALOG_CHANNEL_COUNT,
     CHANNEL_NAMES,
     DEFAULT_BAUD,
+    DEFAULT_SAMPLE_RATE_HZ,
     MINIMUM_SAMPLE_RATE_HZ,
     STOP_MARKER,
     DaqFrameParser,
@@ -65,6 +67,8 @@ OPEN_QUIET_AFTER_STOP_S = 0.05
 """On open, once the stop marker arrived the line must stay quiet this long, s."""
 OPEN_DRAIN_LIMIT_S = 10.0
 """On open, a board still streaming this long after ``STOP`` is an error, s (a full 1 MB FIFO at 4 Mbaud: 2.5 s)."""
+FIRST_SAMPLE_TIMEOUT_S = 5.0
+"""How long the board may take to deliver its first sample after ``START`` in ``ornitail rig check``, s."""
 
 
 @dataclass
@@ -84,7 +88,7 @@ class DaqBlock:
     saturated: np.ndarray | None = field(default=None)
 
 
-class SerialDaqDriver(BalanceStream):
+class SerialDaqDriver(BalanceStream, CheckedDevice):
     """Streams the nine synchronised channels of an ORNI-DAQ9 board (a :class:`BalanceStream` of its own, or the
     auxiliary acquisition beside another balance, see :mod:`aligned_balance`).
 
@@ -103,6 +107,10 @@ class SerialDaqDriver(BalanceStream):
         How long to wait for a command reply before declaring the board disconnected, s.
     clock : callable returning s
         Stamps each block's ``host_time_s`` (default ``time.monotonic``; the rig passes its rig time).
+    rig_file_key : str
+        Where the rig file sets the port (``[balance.aux_daq].port`` for the board beside another balance).
+    check_sample_rate_hz : float
+        The rig file's rate, at which ``ornitail rig check`` streams its one sample, samples/s.
 
     Attributes
     ----------
@@ -126,8 +134,12 @@ class SerialDaqDriver(BalanceStream):
         queue_blocks: int = 2000,
         reply_timeout_s: float = 1.0,
         clock: Callable[[], float] = time.monotonic,
+        rig_file_key: str = "[balance.serial_daq].port",
+        check_sample_rate_hz: float = DEFAULT_SAMPLE_RATE_HZ,
     ) -> None:
         self.port = port
+        self.rig_file_key = rig_file_key
+        self.check_sample_rate_hz = float(check_sample_rate_hz)
         self._clock = clock
         self.baud = int(baud)
         self.name = name
@@ -464,3 +476,43 @@ class SerialDaqDriver(BalanceStream):
             raise RuntimeError(f"{self.name}: open() before adc_limits_v()")
         volts_per_count = np.asarray(identity.volts_per_count, dtype=float)[:ANALOG_CHANNEL_COUNT]
         return -32768 * volts_per_count, 32767 * volts_per_count
+
+    # -- rig check (CheckedDevice) ------------------------------------------------------------
+    def checked_devices(self) -> tuple[CheckedDevice, ...]:
+        """The board itself: one device."""
+        return (self,)
+
+    @property
+    def route(self) -> str:
+        """The serial port."""
+        return self.port
+
+    def check_identity(self) -> tuple[str, str | None]:
+        """``STOP`` and ``ID?`` (:meth:`open`): model, serial number and firmware, and whether it is an ORNI-DAQ9."""
+        identity = self.open()
+        text = (
+            f"model={identity.model} serial={identity.serial_number} firmware={identity.firmware}"
+        )
+        if identity.model == self.model:
+            return text, None
+        return text, (
+            f"{self.port} answers as {identity.model!r}, not {self.model}: is {self.rig_file_key} the right port?"
+        )
+
+    def check_reading(self) -> Reading:
+        """The first sample streamed at :attr:`check_sample_rate_hz`: the rate and every channel, V."""
+        self.start_stream(self.check_sample_rate_hz)
+        deadline = time.monotonic() + FIRST_SAMPLE_TIMEOUT_S
+        while time.monotonic() < deadline:
+            block = self.get_block(timeout_s=0.1)
+            if block is not None and len(block.counters):
+                return {
+                    "sample_rate_hz": float(self.sample_rate_hz or self.check_sample_rate_hz),
+                    **{
+                        name: float(value)
+                        for name, value in zip(CHANNEL_NAMES, block.volts[0], strict=True)
+                    },
+                }
+        raise InstrumentDisconnected(
+            self.name, f"no sample within {FIRST_SAMPLE_TIMEOUT_S:g} s after START on {self.port}"
+        )

@@ -1,7 +1,8 @@
 """Typed reading of one table of a TOML file, every mistake naming the file, table and key.
 
-Rig files, sweep plans, gap baselines, campaign files and hot-wire law files (TOML or JSON) read their tables
-through :class:`TomlTable`, so a user sees the same kind of one-line message for the same kind of mistake, e.g.
+Rig files, sweep plans, model files, gap baselines, campaign files and hot-wire law files (TOML or JSON) read
+their tables through :class:`TomlTable`, so a user sees the same kind of one-line message for the same kind of
+mistake, e.g.
 ``rig.toml: [limits].pitch_deg: 'x' must be a finite number`` (``campaign.toml: seed: -1 must be >= 0`` for a key
 at a file's top level).
 """
@@ -53,12 +54,13 @@ class TomlTable:
         file's top level, whose keys are named without brackets.
     table : object
         The parsed table (of a TOML or a JSON file); anything but a dict is refused.
-    allowed_keys : iterable of str
-        Keys the table may have; any other key is refused (a typo must not drop a limit).
+    allowed_keys : iterable of str or None
+        Keys the table may have; any other key is refused (a typo must not drop a limit). None for a table whose
+        keys are names the file chooses (a model file's ``[constants]``): any key is taken.
     """
 
     def __init__(
-        self, path: Path | str, section: str, table: Any, allowed_keys: Iterable[str]
+        self, path: Path | str, section: str, table: Any, allowed_keys: Iterable[str] | None
     ) -> None:
         self.path = Path(path)
         self.section = section
@@ -70,7 +72,9 @@ class TomlTable:
             )
             raise UserInputError(self.where(), problem)
         self.table = table
-        allowed = sorted(allowed_keys)
+        if allowed_keys is None:
+            return
+        allowed = sorted(set(allowed_keys))
         unknown = sorted(set(table) - set(allowed))
         if unknown:
             raise UserInputError(
@@ -163,6 +167,23 @@ class TomlTable:
             raise UserInputError(self.where(key), f"{value} must be in {minimum}..{maximum}")
         return value
 
+    def texts(self, key: str, default: Any = REQUIRED, *, at_least: int = 0) -> Any:
+        """A list of non-empty strings, at least ``at_least`` of them (None for an absent key whose default is
+        None)."""
+        if self._absent(key, default):
+            return None
+        value = self.get(key, default)
+        if (
+            not isinstance(value, list)
+            or len(value) < at_least
+            or not all(isinstance(item, str) and item.strip() for item in value)
+        ):
+            how_many = f"{at_least} or more " if at_least else ""
+            raise UserInputError(
+                self.where(key), f"{value!r} must be a list of {how_many}non-empty strings"
+            )
+        return list(value)
+
     def numbers(
         self, key: str, count: int, meaning: str, default: Any = REQUIRED, *, or_more: bool = False
     ) -> Any:
@@ -212,10 +233,10 @@ class TomlTable:
         return resolved
 
     def sub_table(
-        self, key: str, allowed_keys: Iterable[str], default: Any = REQUIRED
+        self, key: str, allowed_keys: Iterable[str] | None, default: Any = REQUIRED
     ) -> TomlTable | None:
-        """The table under ``key`` (section ``<section>.<key>``), checked against ``allowed_keys`` (None for an
-        absent key whose default is None)."""
+        """The table under ``key`` (section ``<section>.<key>``), checked against ``allowed_keys`` (any key when
+        None; None for an absent key whose default is None)."""
         if self._absent(key, default):
             return None
         return TomlTable(self.path, self._child(key), self.get(key, default), allowed_keys)

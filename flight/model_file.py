@@ -21,6 +21,7 @@ import numpy as np
 
 from ornitail.core.errors import UserInputError
 from ornitail.core.input_files import read_toml_file
+from ornitail.core.toml_table import REQUIRED, TomlTable, is_finite_number
 from ornitail.flight.expressions import FUNCTION_NAMES, Expression, parse_expression
 from ornitail.flight.state_space import NumericStateSpace
 
@@ -30,6 +31,11 @@ INPUT_HOLDS = ("first_order", "zero_order")
 DATA_STATISTICS = ("mean", "median", "first")
 MATRIX_NAMES = ("A", "B", "C", "D")
 _NAME_PATTERN = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
+_TOP_LEVEL_KEYS = ("model", "constants", "parameters", "matrices", "columns", "data")
+_MODEL_KEYS = ("name", "description", "states", "inputs", "outputs", "initial_state", "input_hold")
+_DATA_CONSTANT_KEYS = ("column", "statistic", "scale", "offset")
+_PARAMETER_KEYS = ("start", "lower", "upper", "fixed", "unit", "nuisance")
+_COLUMN_KEYS = ("column", "scale", "offset", "constant", "remove_start_mean_s")
 
 
 @dataclass(frozen=True)
@@ -204,10 +210,9 @@ def _finite_entry(entry: Expression, values: Mapping[str, float]) -> float:
 
 
 def require_finite_value(where: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise UserInputError(where, f"expected a number, got {value!r}")
-    if not math.isfinite(float(value)):
-        raise UserInputError(where, f"value {value!r} is not a finite number")
+    """``value`` as a float; anything but a finite number is refused naming ``where``."""
+    if not is_finite_number(value):
+        raise UserInputError(where, f"{value!r} must be a finite number")
     return float(value)
 
 
@@ -242,47 +247,32 @@ def load_model(path_or_preset_name: str | Path) -> StateSpaceModelSpec:
 
 def model_from_document(document: Mapping[str, Any], source: str) -> StateSpaceModelSpec:
     """Build and check a model from a parsed TOML document; ``source`` names it in errors."""
-    _reject_unknown_keys(
-        document, ("model", "constants", "parameters", "matrices", "columns", "data"), source, ""
-    )
-    model_table = _table(document, "model", source, required=True)
-    _reject_unknown_keys(
-        model_table,
-        ("name", "description", "states", "inputs", "outputs", "initial_state", "input_hold"),
-        source,
-        "[model]",
-    )
-    states = _name_list(model_table, "states", source)
-    inputs = _name_list(model_table, "inputs", source)
-    outputs = _name_list(model_table, "outputs", source)
+    top = TomlTable(source, "", document, _TOP_LEVEL_KEYS)
+    model_table = top.sub_table("model", _MODEL_KEYS)
+    states = _names(model_table, "states")
+    inputs = _names(model_table, "inputs")
+    outputs = _names(model_table, "outputs")
     if set(states) & set(inputs):
-        raise UserInputError(
-            f"{source}: [model].inputs", f"{sorted(set(states) & set(inputs))[0]!r} is also a state"
-        )
+        both = sorted(set(states) & set(inputs))[0]
+        raise UserInputError(model_table.where("inputs"), f"{both!r} is also a state")
     if set(inputs) & set(outputs):
-        raise UserInputError(
-            f"{source}: [model].outputs",
-            f"{sorted(set(inputs) & set(outputs))[0]!r} is also an input",
-        )
-    initial_state = model_table.get("initial_state", "estimate")
-    if initial_state not in INITIAL_STATE_RULES:
-        raise UserInputError(
-            f"{source}: [model].initial_state",
-            f"must be one of {', '.join(INITIAL_STATE_RULES)}, got {initial_state!r}",
-        )
+        both = sorted(set(inputs) & set(outputs))[0]
+        raise UserInputError(model_table.where("outputs"), f"{both!r} is also an input")
+    initial_state = model_table.text("initial_state", "estimate", choices=INITIAL_STATE_RULES)
+    input_hold = model_table.text("input_hold", "first_order", choices=INPUT_HOLDS)
+    name = model_table.text("name", Path(source).stem)
+    description = model_table.text("description", "", empty=True)
 
-    input_hold = _checked_input_hold(
-        model_table.get("input_hold", "first_order"), f"{source}: [model].input_hold"
-    )
-
-    constants, data_constants = _constants(_table(document, "constants", source), source)
-    parameters = _parameters(_table(document, "parameters", source, required=True), source)
+    constants, data_constants = _constants(top.sub_table("constants", None, {}))
+    parameters_table = top.sub_table("parameters", None)
+    parameters = _parameters(parameters_table)
     known = set(constants) | {item.name for item in data_constants}
-    clash = known & {parameter.name for parameter in parameters}
-    if clash:
-        raise UserInputError(
-            f"{source}: [parameters].{sorted(clash)[0]}", "also defined as a constant"
-        )
+    for parameter in parameters:
+        if parameter.name in known:
+            raise UserInputError(
+                parameters_table.where(parameter.name),
+                f"{parameter.name!r} is also defined as a constant",
+            )
     known |= {parameter.name for parameter in parameters}
 
     shapes = {
@@ -291,48 +281,24 @@ def model_from_document(document: Mapping[str, Any], source: str) -> StateSpaceM
         "C": (len(outputs), len(states)),
         "D": (len(outputs), len(inputs)),
     }
-    matrices_table = _table(document, "matrices", source, required=True)
-    _reject_unknown_keys(matrices_table, MATRIX_NAMES, source, "[matrices]")
+    matrices_table = top.sub_table("matrices", MATRIX_NAMES)
     matrices = {
-        name: _matrix(matrices_table.get(name), name, shapes[name], known, source)
-        for name in MATRIX_NAMES
+        matrix: _matrix(matrices_table, matrix, shapes[matrix], known) for matrix in MATRIX_NAMES
     }
 
-    data_table = _table(document, "data", source, required=True)
-    _reject_unknown_keys(data_table, ("time_column", "time_scale"), source, "[data]")
-    time_column = data_table.get("time_column")
-    if not isinstance(time_column, str) or not time_column:
-        raise UserInputError(f"{source}: [data].time_column", "must name the data's time column")
-    time_scale = require_finite_value(
-        f"{source}: [data].time_scale", data_table.get("time_scale", 1.0)
-    )
-    if time_scale <= 0:
-        raise UserInputError(f"{source}: [data].time_scale", "must be positive")
+    data_table = top.sub_table("data", ("time_column", "time_scale"))
+    time_column = data_table.text("time_column")
+    time_scale = data_table.number("time_scale", 1.0, positive=True)
 
-    columns = _columns(_table(document, "columns", source, required=True), source)
-    for signal in (*inputs, *outputs):
-        if signal not in columns:
-            raise UserInputError(f"{source}: [columns]", f"no column given for signal {signal!r}")
-    unknown_signals = set(columns) - set(states) - set(inputs) - set(outputs)
-    if unknown_signals:
-        raise UserInputError(
-            f"{source}: [columns].{sorted(unknown_signals)[0]}",
-            "not a state, input or output of the model",
-        )
-    for signal in (*states, *outputs):
-        if signal in columns and columns[signal].constant is not None:
-            raise UserInputError(f"{source}: [columns].{signal}", "only inputs may be constants")
+    columns_table = top.sub_table("columns", (*states, *inputs, *outputs))
+    columns = _columns(columns_table, states, inputs, outputs)
     if initial_state == "data":
         for state in states:
             if state not in columns:
                 raise UserInputError(
-                    f"{source}: [columns]",
-                    f"initial_state = 'data' needs a column for state {state!r}",
+                    columns_table.where(state),
+                    "required key is missing (initial_state = 'data' needs a column for every state)",
                 )
-    name = model_table.get("name", Path(source).stem)
-    description = model_table.get("description", "")
-    if not isinstance(name, str) or not isinstance(description, str):
-        raise UserInputError(f"{source}: [model].name", "name and description must be strings")
     return StateSpaceModelSpec(
         name=name,
         source=source,
@@ -353,31 +319,10 @@ def model_from_document(document: Mapping[str, Any], source: str) -> StateSpaceM
 
 
 def _checked_input_hold(value: Any, where: str) -> str:
+    """``value`` if it is one of ``INPUT_HOLDS`` (``with_input_hold``'s check)."""
     if value not in INPUT_HOLDS:
-        raise UserInputError(where, f"must be one of {', '.join(INPUT_HOLDS)}, got {value!r}")
+        raise UserInputError(where, f"{value!r} must be one of {', '.join(INPUT_HOLDS)}")
     return value
-
-
-def _table(
-    document: Mapping[str, Any], key: str, source: str, required: bool = False
-) -> Mapping[str, Any]:
-    if key not in document:
-        if required:
-            raise UserInputError(f"{source}: [{key}]", "table missing")
-        return {}
-    value = document[key]
-    if not isinstance(value, dict):
-        raise UserInputError(f"{source}: [{key}]", "must be a table")
-    return value
-
-
-def _reject_unknown_keys(
-    table: Mapping[str, Any], allowed: Sequence[str], source: str, prefix: str
-) -> None:
-    for key in table:
-        if key not in allowed:
-            where = f"{source}: {prefix}.{key}" if prefix else f"{source}: [{key}]"
-            raise UserInputError(where, f"unknown field (allowed: {', '.join(allowed)})")
 
 
 def _check_name(name: Any, where: str) -> str:
@@ -388,112 +333,87 @@ def _check_name(name: Any, where: str) -> str:
     return name
 
 
-def _name_list(table: Mapping[str, Any], key: str, source: str) -> tuple[str, ...]:
-    where = f"{source}: [model].{key}"
-    values = table.get(key)
-    if not isinstance(values, list) or not values:
-        raise UserInputError(where, "must be a non-empty list of names")
-    names = tuple(_check_name(value, where) for value in values)
-    if len(set(names)) != len(names):
-        raise UserInputError(where, "names must be unique")
+def _names(table: TomlTable, key: str) -> tuple[str, ...]:
+    """A non-empty list of unique valid names (``[model].states``, ``inputs``, ``outputs``)."""
+    names = tuple(_check_name(name, table.where(key)) for name in table.texts(key, at_least=1))
+    repeated = [name for index, name in enumerate(names) if name in names[:index]]
+    if repeated:
+        raise UserInputError(
+            table.where(key), f"{list(names)!r} must be unique names ({repeated[0]!r} repeats)"
+        )
     return names
 
 
-def _constants(
-    table: Mapping[str, Any], source: str
-) -> tuple[dict[str, float], tuple[DataConstant, ...]]:
+def _constants(table: TomlTable) -> tuple[dict[str, float], tuple[DataConstant, ...]]:
+    """``[constants]``: numbers, and tables that take a statistic of a data column."""
     constants: dict[str, float] = {}
     data_constants = []
-    for name, value in table.items():
-        where = f"{source}: [constants].{name}"
-        _check_name(name, where)
-        if isinstance(value, dict):
-            _reject_unknown_keys(
-                value, ("column", "statistic", "scale", "offset"), source, f"[constants].{name}"
+    for name in table.table:
+        _check_name(name, table.where(name))
+        if not isinstance(table.get(name), dict):
+            constants[name] = table.number(name)
+            continue
+        entry = table.sub_table(name, _DATA_CONSTANT_KEYS)
+        data_constants.append(
+            DataConstant(
+                name=name,
+                column=entry.text("column"),
+                statistic=entry.text("statistic", "mean", choices=DATA_STATISTICS),
+                scale=entry.number("scale", 1.0),
+                offset=entry.number("offset", 0.0),
             )
-            column = value.get("column")
-            if not isinstance(column, str) or not column:
-                raise UserInputError(f"{where}.column", "must name a data column")
-            statistic = value.get("statistic", "mean")
-            if statistic not in DATA_STATISTICS:
-                raise UserInputError(
-                    f"{where}.statistic", f"must be one of {', '.join(DATA_STATISTICS)}"
-                )
-            data_constants.append(
-                DataConstant(
-                    name=name,
-                    column=column,
-                    statistic=statistic,
-                    scale=require_finite_value(f"{where}.scale", value.get("scale", 1.0)),
-                    offset=require_finite_value(f"{where}.offset", value.get("offset", 0.0)),
-                )
-            )
-        else:
-            constants[name] = require_finite_value(where, value)
+        )
     return constants, tuple(data_constants)
 
 
-def _parameters(table: Mapping[str, Any], source: str) -> tuple[ParameterSpec, ...]:
-    if not table:
-        raise UserInputError(f"{source}: [parameters]", "the model has no parameters")
-    parameters = []
-    for name, value in table.items():
-        where = f"{source}: [parameters].{name}"
-        _check_name(name, where)
-        if not isinstance(value, dict):
-            value = {"start": value}
-        _reject_unknown_keys(
-            value,
-            ("start", "lower", "upper", "fixed", "unit", "nuisance"),
-            source,
-            f"[parameters].{name}",
-        )
-        if "start" not in value:
-            raise UserInputError(f"{where}.start", "start value missing")
-        start = require_finite_value(f"{where}.start", value["start"])
-        lower = -math.inf
-        upper = math.inf
-        if "lower" in value:
-            lower = require_finite_value(f"{where}.lower", value["lower"])
-        if "upper" in value:
-            upper = require_finite_value(f"{where}.upper", value["upper"])
-        if lower >= upper:
-            raise UserInputError(
-                f"{where}.lower", f"lower bound {lower:g} is not below upper {upper:g}"
-            )
-        if not lower <= start <= upper:
-            raise UserInputError(
-                f"{where}.start", f"start {start:g} lies outside the bounds [{lower:g}, {upper:g}]"
-            )
-        fixed = value.get("fixed", False)
-        if not isinstance(fixed, bool):
-            raise UserInputError(f"{where}.fixed", "must be true or false")
-        unit = value.get("unit", "")
-        if not isinstance(unit, str):
-            raise UserInputError(f"{where}.unit", f"must be a string such as '1/s', got {unit!r}")
-        nuisance = value.get("nuisance", False)
-        if not isinstance(nuisance, bool):
-            raise UserInputError(f"{where}.nuisance", "must be true or false")
-        parameters.append(ParameterSpec(name, start, lower, upper, fixed, unit, nuisance))
+def _parameters(table: TomlTable) -> tuple[ParameterSpec, ...]:
+    """``[parameters]``: a start value, or a table of start, bounds, fixed, unit and nuisance."""
+    if not table.table:
+        raise UserInputError(table.where(), "the model has no parameters")
+    parameters = [_parameter(table, name) for name in table.table]
     if all(parameter.fixed for parameter in parameters):
-        raise UserInputError(f"{source}: [parameters]", "every parameter is fixed")
+        raise UserInputError(table.where(), "every parameter is fixed")
     if all(parameter.fixed or parameter.nuisance for parameter in parameters):
-        raise UserInputError(
-            f"{source}: [parameters]", "every free parameter is a nuisance parameter"
-        )
+        raise UserInputError(table.where(), "every free parameter is a nuisance parameter")
     return tuple(parameters)
 
 
+def _parameter(table: TomlTable, name: str) -> ParameterSpec:
+    """One parameter: a bare start value, or its table (section ``parameters.<name>``)."""
+    _check_name(name, table.where(name))
+    if not isinstance(table.get(name), dict):
+        return ParameterSpec(name, table.number(name))
+    entry = table.sub_table(name, _PARAMETER_KEYS)
+    start = entry.number("start")
+    lower = entry.number("lower", None)
+    upper = entry.number("upper", None)
+    lower = -math.inf if lower is None else lower
+    upper = math.inf if upper is None else upper
+    if lower >= upper:
+        raise UserInputError(entry.where("lower"), f"lower {lower:g} must be below upper {upper:g}")
+    if not lower <= start <= upper:
+        raise UserInputError(
+            entry.where("start"), f"{start:g} must lie within the bounds [{lower:g}, {upper:g}]"
+        )
+    return ParameterSpec(
+        name,
+        start,
+        lower,
+        upper,
+        fixed=entry.boolean("fixed", False),
+        unit=entry.text("unit", "", empty=True),
+        nuisance=entry.boolean("nuisance", False),
+    )
+
+
 def _matrix(
-    value: Any, name: str, shape: tuple[int, int], known: set[str], source: str
+    table: TomlTable, name: str, shape: tuple[int, int], known: set[str]
 ) -> tuple[tuple[Expression, ...], ...]:
-    where = f"{source}: [matrices].{name}"
+    """One matrix: rows of numbers or expressions over ``known`` names, ``"identity"`` or
+    ``"zero"``; D is zero when absent."""
+    where = table.where(name)
     rows, columns = shape
-    if value is None:
-        if name == "D":
-            value = [[0] * columns for _ in range(rows)]
-        else:
-            raise UserInputError(where, "matrix missing")
+    value = table.get(name, "zero" if name == "D" else REQUIRED)
     if value == "identity":
         if rows != columns:
             raise UserInputError(
@@ -525,46 +445,53 @@ def _matrix(
     return tuple(result)
 
 
-def _columns(table: Mapping[str, Any], source: str) -> dict[str, SignalColumn]:
-    columns = {}
-    for signal, value in table.items():
-        where = f"{source}: [columns].{signal}"
-        if isinstance(value, str):
-            value = {"column": value}
-        if not isinstance(value, dict):
-            raise UserInputError(where, "must be a column name or a table")
-        _reject_unknown_keys(
-            value,
-            ("column", "scale", "offset", "constant", "remove_start_mean_s"),
-            source,
-            f"[columns].{signal}",
-        )
-        if ("column" in value) == ("constant" in value):
-            raise UserInputError(where, "give exactly one of column or constant")
-        if "constant" in value:
-            if set(value) != {"constant"}:
-                raise UserInputError(
-                    where, "a constant signal takes no scale, offset or mean removal"
-                )
-            columns[signal] = SignalColumn(
-                signal, constant=require_finite_value(f"{where}.constant", value["constant"])
+def _columns(
+    table: TomlTable,
+    states: Sequence[str],
+    inputs: Sequence[str],
+    outputs: Sequence[str],
+) -> dict[str, SignalColumn]:
+    """``[columns]``: every input and output (and optionally a state) from a column or a constant."""
+    for signal in (*inputs, *outputs):
+        if signal not in table.table:
+            raise UserInputError(
+                table.where(signal), "required key is missing (every input and output needs one)"
             )
-            continue
-        if not isinstance(value["column"], str) or not value["column"]:
-            raise UserInputError(f"{where}.column", "must be a column name")
-        scale = require_finite_value(f"{where}.scale", value.get("scale", 1.0))
-        if scale == 0:
-            raise UserInputError(f"{where}.scale", "must not be zero")
-        remove = value.get("remove_start_mean_s")
-        if remove is not None:
-            remove = require_finite_value(f"{where}.remove_start_mean_s", remove)
-            if remove <= 0:
-                raise UserInputError(f"{where}.remove_start_mean_s", "must be positive (seconds)")
-        columns[signal] = SignalColumn(
-            signal,
-            column=value["column"],
-            scale=scale,
-            offset=require_finite_value(f"{where}.offset", value.get("offset", 0.0)),
-            remove_start_mean_s=remove,
-        )
+    columns = {signal: _column(table, signal) for signal in table.table}
+    for signal in (*states, *outputs):
+        if signal in columns and columns[signal].constant is not None:
+            raise UserInputError(
+                table.where(signal), f"{signal!r} is not an input: only an input may be a constant"
+            )
     return columns
+
+
+def _column(table: TomlTable, signal: str) -> SignalColumn:
+    """One signal: a bare column name, or its table (section ``columns.<signal>``)."""
+    value = table.get(signal)
+    if isinstance(value, str):
+        return SignalColumn(signal, column=table.text(signal))
+    if not isinstance(value, dict):
+        raise UserInputError(table.where(signal), f"{value!r} must be a column name or a table")
+    entry = table.sub_table(signal, _COLUMN_KEYS)
+    if ("column" in value) == ("constant" in value):
+        raise UserInputError(entry.where(), "must have exactly one of the keys column and constant")
+    if "constant" in value:
+        extra = sorted(set(value) - {"constant"})
+        if extra:
+            raise UserInputError(
+                entry.where(extra[0]), "a constant signal takes no scale, offset or mean removal"
+            )
+        return SignalColumn(signal, constant=entry.number("constant"))
+    scale = entry.number("scale", 1.0)
+    if scale == 0:
+        raise UserInputError(
+            entry.where("scale"), "0 must be nonzero (a zero scale loses the signal)"
+        )
+    return SignalColumn(
+        signal,
+        column=entry.text("column"),
+        scale=scale,
+        offset=entry.number("offset", 0.0),
+        remove_start_mean_s=entry.number("remove_start_mean_s", None, positive=True),
+    )

@@ -196,3 +196,25 @@ def test_sub_tables_intervals_number_lists_and_strings():
     # a choice names the choices whatever the wrong value's type
     with pytest.raises(UserInputError, match=r"\[s\]\.rule: 25 must be one of a, b"):
         reader.text("rule", choices=("a", "b"))
+
+
+def test_a_table_of_names_the_file_chooses_takes_any_key():
+    document = {
+        "constants": {"g": 9.81, "V": {"column": "v"}},
+        "names": ["a", "b"],
+        "bad": ["a", ""],
+    }
+    reader = TomlTable("f.toml", "", document, set(document))
+    constants = reader.sub_table("constants", None)
+    assert list(constants.table) == ["g", "V"] and constants.number("g") == 9.81
+    assert constants.sub_table("V", {"column"}).where("column") == "f.toml: [constants.V].column"
+    assert reader.texts("names", at_least=1) == ["a", "b"]
+    assert reader.texts("absent", None) is None
+    with pytest.raises(
+        UserInputError, match=r"^f\.toml: bad: \['a', ''\] must be a list of non-empty"
+    ):
+        reader.texts("bad")
+    with pytest.raises(
+        UserInputError, match=r"^f\.toml: names: \['a', 'b'\] must be a list of 3 or more non-empty"
+    ):
+        reader.texts("names", at_least=3)

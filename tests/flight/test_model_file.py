@@ -73,7 +73,7 @@ def test_the_bias_preset_is_the_study_model_plus_nuisance_biases():
 
 def test_nuisance_must_be_a_boolean_and_not_every_free_parameter(tmp_path):
     text = MINIMAL.replace("upper = 0.0 }", 'upper = 0.0, nuisance = "yes" }')
-    with pytest.raises(UserInputError, match=r"\[parameters\]\.a\.nuisance: must be true or"):
+    with pytest.raises(UserInputError, match=r"\[parameters\.a\]\.nuisance: 'yes' must be true or"):
         load_model(write_model(tmp_path, text))
     text = MINIMAL.replace("upper = 0.0 }", "upper = 0.0, nuisance = true }")
     text = text.replace("b = 0.5", "b = { start = 0.5, nuisance = true }")
@@ -120,22 +120,65 @@ def test_a_file_path_loads_and_builds_numeric_matrices(tmp_path):
         ('A = [["a"]]', 'A = [["a*zeta"]]', "[matrices].A[1][1]", "unknown name 'zeta'"),
         ('B = [["b*k"]]', 'B = [["b", "k"]]', "[matrices].B", "must be 1x1, found 1x2"),
         ("C = [[1]]", 'C = [["__import__(1)"]]', "[matrices].C[1][1]", "only the functions"),
-        ("upper = 0.0 }", "upper = -20.0 }", "[parameters].a.lower", "not below upper"),
-        ("lower = -10.0", "lower = -0.5", "[parameters].a.start", "outside the bounds"),
-        ("k = 2.0", "k = nan", "[constants].k", "not a finite number"),
-        ("k = 2.0", 'k = "two"', "[constants].k", "expected a number"),
-        ('y = "x_col"\n', "", "[columns]", "no column given for signal 'y'"),
-        ('time_column = "t"', 'time_colum = "t"', "[data].time_colum", "unknown field"),
-        ("b = 0.5", "b = { start = 0.5, fixd = true }", "[parameters].b.fixd", "unknown field"),
-        ('outputs = ["y"]', 'outputs = ["y", "y"]', "[model].outputs", "unique"),
+        ("C = [[1]]\n", "", "[matrices].C", "required key is missing"),
+        ("upper = 0.0 }", "upper = -20.0 }", "[parameters.a].lower", "-10 must be below upper -20"),
+        ("lower = -10.0", "lower = -0.5", "[parameters.a].start", "-1 must lie within the bounds"),
+        ("lower = -10.0", "lower = nan", "[parameters.a].lower", "nan must be a finite number"),
+        ("b = 0.5", 'b = "half"', "[parameters].b", "'half' must be a finite number"),
+        ("b = 0.5", "b = { lower = 0.5 }", "[parameters.b].start", "required key is missing"),
+        ("b = 0.5", "b = { start = 0.5, fixd = true }", "[parameters.b].fixd", "unknown key"),
+        ("b = 0.5", "k = 0.5", "[parameters].k", "'k' is also defined as a constant"),
+        ("b = 0.5", "sin = 0.5", "[parameters].sin", "'sin' is a function name"),
+        ("k = 2.0", "k = nan", "[constants].k", "nan must be a finite number"),
+        ("k = 2.0", 'k = "two"', "[constants].k", "'two' must be a finite number"),
+        ("k = 2.0", "2k = 2.0", "[constants].2k", "'2k' is not a valid name"),
+        (
+            "k = 2.0",
+            'k = { column = "k_col", statistic = "max" }',
+            "[constants.k].statistic",
+            "'max' must be one of mean, median, first",
+        ),
+        ("k = 2.0", 'k = { colum = "k_col" }', "[constants.k].colum", "unknown key"),
+        ('y = "x_col"\n', "", "[columns].y", "required key is missing"),
+        ('y = "x_col"', 'y = ""', "[columns].y", "'' must be a non-empty string"),
+        ('y = "x_col"', "y = 3", "[columns].y", "3 must be a column name or a table"),
+        ('y = "x_col"', "y = { constant = 1.0 }", "[columns].y", "only an input may be a constant"),
+        ("scale = 0.0174533", "scale = 0", "[columns.u].scale", "0 must be nonzero"),
+        ("scale = 0.0174533", "constant = 1.0", "[columns.u]", "exactly one of the keys column"),
+        (
+            'u = { column = "u_deg", scale = 0.0174533 }',
+            "u = { constant = 1.0, offset = 2.0 }",
+            "[columns.u].offset",
+            "a constant signal takes no scale",
+        ),
+        (
+            "scale = 0.0174533",
+            "remove_start_mean_s = -1",
+            "[columns.u].remove_start_mean_s",
+            "-1 must be > 0",
+        ),
+        ('x = "x_col"', 'z = "x_col"', "[columns].z", "unknown key; allowed keys are u, x, y"),
+        ('time_column = "t"', 'time_colum = "t"', "[data].time_colum", "unknown key"),
+        (
+            'time_column = "t"',
+            'time_column = "t"\ntime_scale = 0',
+            "[data].time_scale",
+            "0 must be > 0",
+        ),
+        ("[data]", "[dataz]", "dataz", "unknown key; allowed keys are columns, constants"),
+        ('outputs = ["y"]', 'outputs = ["y", "y"]', "[model].outputs", "must be unique names"),
+        ('outputs = ["y"]', 'outputs = "y"', "[model].outputs", "'y' must be a list of 1 or more"),
+        ('outputs = ["y"]', "outputs = []", "[model].outputs", "[] must be a list of 1 or more"),
+        ('inputs = ["u"]', 'inputs = ["x"]', "[model].inputs", "'x' is also a state"),
+        ('outputs = ["y"]', 'outputs = ["u"]', "[model].outputs", "'u' is also an input"),
         (
             'states = ["x"]',
             'states = ["x"]\ninitial_state = "guess"',
-            "initial_state",
-            "must be one",
+            "[model].initial_state",
+            "'guess' must be one of estimate, data, zero",
         ),
-        ('x = "x_col"', 'z = "x_col"', "[columns].z", "not a state, input or output"),
-        ("b = 0.5", "k = 0.5", "[parameters].k", "also defined as a constant"),
+        ('states = ["x"]', 'states = ["x"]\nname = 3', "[model].name", "3 must be a"),
+        ('states = ["x"]', 'states = ["x"]\nstate = ["x"]', "[model].state", "unknown key"),
     ],
 )
 def test_mistakes_name_file_and_field(tmp_path, old, new, where, problem):
@@ -143,8 +186,33 @@ def test_mistakes_name_file_and_field(tmp_path, old, new, where, problem):
     path = write_model(tmp_path, MINIMAL.replace(old, new))
     with pytest.raises(UserInputError) as error:
         load_model(path)
-    assert str(path) in error.value.where and where in error.value.where
-    assert problem in error.value.problem
+    assert error.value.where == f"{path}: {where}"
+    assert problem in error.value.problem and "\n" not in str(error.value)
+
+
+def test_missing_and_wrong_tables_are_named(tmp_path):
+    text = MINIMAL.replace("[model]", "[modell]")
+    with pytest.raises(UserInputError, match=r"modell: unknown key; allowed keys are"):
+        load_model(write_model(tmp_path, text))
+    parameters = MINIMAL[MINIMAL.index("[parameters]") : MINIMAL.index("[matrices]")]
+    with pytest.raises(UserInputError, match=r"model\.toml: parameters: required key is missing"):
+        load_model(write_model(tmp_path, MINIMAL.replace(parameters, "")))
+    text = MINIMAL.replace(parameters, "[parameters]\n")
+    with pytest.raises(UserInputError, match=r"\[parameters\]: the model has no parameters"):
+        load_model(write_model(tmp_path, text))
+    text = MINIMAL.replace(parameters, "[parameters]\na = { start = 1.0, fixed = true }\n")
+    with pytest.raises(UserInputError, match=r"\[parameters\]: every parameter is fixed"):
+        load_model(write_model(tmp_path, text))
+    text = MINIMAL.replace('states = ["x"]', 'states = ["x"]\ninitial_state = "data"')
+    text = text.replace('x = "x_col"\n', "")
+    with pytest.raises(UserInputError, match=r"\[columns\]\.x: required key is missing"):
+        load_model(write_model(tmp_path, text))
+    text = MINIMAL.replace('time_column = "t"', 'time_column = "t"\n[model2]\na = 1')
+    with pytest.raises(UserInputError, match=r"model2: unknown key"):
+        load_model(write_model(tmp_path, text))
+    text = "data = 3\n" + MINIMAL.replace('[data]\ntime_column = "t"', "")
+    with pytest.raises(UserInputError, match=r"model\.toml: \[data\]: must be a table"):
+        load_model(write_model(tmp_path, text))
 
 
 def test_missing_file_and_bad_toml_are_user_errors(tmp_path):
