@@ -71,6 +71,7 @@ def _outcome(
         "reported_set": sorted(named),
         "closure_test": report["closure"]["realised_test"],
         "closure_interval": report["closure"]["interval"],
+        "closure_fresh_data_interval": report["closure"]["fresh_data_interval"],
     }
     if expected is not None and expected in named and magnitude:
         entry = next(e for e in report["ranking"] if e["name"] == expected)
@@ -90,8 +91,10 @@ def _fresh_closure(diagnosis: FlightDiagnosis, spec_path: Path, log_path: Path) 
 
 def _within(result: dict[str, object], fresh: float) -> None:
     low, high = result["closure_interval"]
+    fresh_low, fresh_high = result["closure_fresh_data_interval"]
     result["closure_fresh_flight"] = fresh
     result["fresh_within_interval"] = bool(low <= fresh <= high)
+    result["fresh_within_prediction_interval"] = bool(fresh_low <= fresh <= fresh_high)
 
 
 def sim_part(cases: int, seed: int, tick: Callable[[str], None]) -> list[dict[str, object]]:
@@ -114,6 +117,7 @@ def sim_part(cases: int, seed: int, tick: Callable[[str], None]) -> list[dict[st
             result["magnitude_error"] = scored["magnitude_error"]
         if "closure_fresh_flight" in scored:
             result["closure_interval"] = scored["closure_interval"]
+            result["closure_fresh_data_interval"] = scored["closure_fresh_data_interval"]
             _within(result, scored["closure_fresh_flight"])
         results.append(result)
         tick(f"sim {index + 1}/{cases}: {result['expected']} -> {result['verdict']}")
@@ -178,6 +182,9 @@ def summarise(results: list[dict[str, object]]) -> dict[str, object]:
     named = [r.get("named_in_library", r["expected"] in r["reported_set"]) for r in library]
     errors = [r["magnitude_error"] for r in results if "magnitude_error" in r]
     fresh = [r["fresh_within_interval"] for r in results if "fresh_within_interval" in r]
+    predicted = [
+        r["fresh_within_prediction_interval"] for r in results if "fresh_within_interval" in r
+    ]
     return {
         "cases": len(results),
         "false_alarms_on_no_effect": _rate([r["verdict"] == "effect" for r in none_cases]),
@@ -194,6 +201,7 @@ def summarise(results: list[dict[str, object]]) -> dict[str, object]:
         ),
         "out_of_library_named_as": [r["reported"] or r["verdict"] for r in outside],
         "fresh_flight_closure_within_reported_interval": _rate(fresh),
+        "fresh_flight_closure_within_prediction_interval": _rate(predicted),
     }
 
 

@@ -93,7 +93,7 @@ def fresh_flight_closure(case: WithheldCase, diagnosis: FlightDiagnosis, folder:
 
 def run_case(case: WithheldCase, folder: Path, seed: int) -> dict[str, object]:
     """Fly, write, diagnose blind, and score one case (and, when an effect is named, its closure
-    on a fresh flight of the same case against the reported interval)."""
+    on a fresh flight of the same case against the reported intervals)."""
     log_path = write_flight_log_csv(simulate_withheld_log(case), folder / "flight.csv")
     spec_path = write_baseline_spec(case.baseline_spec(), folder / "baseline.toml")
     diagnosis = diagnose_flight(read_baseline_spec(spec_path), [log_path], seed=seed)
@@ -128,10 +128,13 @@ def run_case(case: WithheldCase, folder: Path, seed: int) -> dict[str, object]:
     }
     if report["verdict"] == "effect":
         low, high = report["closure"]["interval"]
+        fresh_low, fresh_high = report["closure"]["fresh_data_interval"]
         fresh = fresh_flight_closure(case, diagnosis, folder)
         result["closure_interval"] = [low, high]
+        result["closure_fresh_data_interval"] = [fresh_low, fresh_high]
         result["closure_fresh_flight"] = fresh
         result["fresh_within_interval"] = bool(low <= fresh <= high)
+        result["fresh_within_prediction_interval"] = bool(fresh_low <= fresh <= fresh_high)
     if len(truth) == 1:
         ((name, magnitude),) = truth.items()
         entry = by_name.get(name)
@@ -193,6 +196,11 @@ def summarise(results: list[dict[str, object]]) -> dict[str, object]:
         else None,
         "closure_true_effect_median": float(np.median([p[1] for p in paired])) if paired else None,
         "fresh_flight_within_interval": float(np.mean([r["fresh_within_interval"] for r in named]))
+        if named
+        else None,
+        "fresh_flight_within_prediction_interval": float(
+            np.mean([r["fresh_within_prediction_interval"] for r in named])
+        )
         if named
         else None,
         "fresh_flight_below_reported": float(

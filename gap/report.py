@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ornitail.gap.detection import DetectionRule
-from ornitail.gap.intervals import closure_with_interval, gap_with_interval
+from ornitail.gap.intervals import closure_with_interval, fresh_data_interval, gap_with_interval
 from ornitail.gap.model_spec import BaselineSpec
 from ornitail.gap.ranking import Ranking
 from ornitail.gap.verdict import verdict_of
@@ -51,7 +51,8 @@ def assemble_report(
     top = ranking.entries[0]
     gap_before = gap_with_interval(before_sse, sample_counts, channels, seed)
     gap_after = gap_with_interval(after_sse, sample_counts, channels, seed)
-    realised, interval = closure_with_interval(before_sse.sum(axis=1), after_sse.sum(axis=1), seed)
+    run_before, run_after = before_sse.sum(axis=1), after_sse.sum(axis=1)
+    realised, interval = closure_with_interval(run_before, run_after, seed)
     verdict = verdict_of(
         ranking,
         gap_before["total"] if verdict_gap is None else verdict_gap,
@@ -93,6 +94,7 @@ def assemble_report(
             "realised_validation": top.heldout_closure,
             "realised_test": realised,
             "interval": interval,
+            "fresh_data_interval": fresh_data_interval(run_before, run_after, seed),
         },
         "ranking": [
             {

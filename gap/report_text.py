@@ -105,6 +105,12 @@ def render_report(report: dict[str, Any]) -> str:
         f"runs {closure['realised_test']:.3f} [{low:.3f}, {high:.3f}] (interval over test runs, "
         "conditional on the chosen effect)"
     )
+    if closure.get("fresh_data_interval"):
+        fresh_low, fresh_high = closure["fresh_data_interval"]
+        lines.append(
+            f"  on new data of as many runs (a fresh flight): closure {fresh_low:.3f} to "
+            f"{fresh_high:.3f} (90 % prediction interval: these runs' scatter and the new data's own)"
+        )
     lines += _refit_lines(report.get("derivative_refit"))
     pointer = report["sparse_regression"]
     lines.append("sparse regression of the residual (pointer):")

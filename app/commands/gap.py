@@ -225,7 +225,9 @@ def render_benchmark(result: dict) -> str:
         f"validation runs {number(scores['closure_reported_validation_median'])}; true effect on "
         f"validation runs {number(scores['closure_true_effect_median'])} (medians)",
         f"named effects on a fresh flight of the same case: closure within the reported interval "
-        f"{percent(scores['fresh_flight_within_interval'])}, below the reported closure "
+        f"{percent(scores['fresh_flight_within_interval'])} (test runs) and "
+        f"{percent(scores['fresh_flight_within_prediction_interval'])} (90 % prediction for new "
+        f"data), below the reported closure "
         f"{percent(scores['fresh_flight_below_reported'])}, reported minus fresh "
         f"{number(scores['closure_reported_minus_fresh_median'])} (median)",
         "confusion matrix (rows: true effect; columns: reported):",

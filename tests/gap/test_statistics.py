@@ -8,7 +8,7 @@ from ornitail.core.errors import UserInputError
 from ornitail.gap.detection import DetectionRule
 from ornitail.gap.flight_data import FlightRun, nested_split_counts, nested_splits
 from ornitail.gap.flight_localisation import unlocked_residual_sd
-from ornitail.gap.intervals import closure_with_interval, gap_with_interval
+from ornitail.gap.intervals import closure_with_interval, fresh_data_interval, gap_with_interval
 from ornitail.gap.magnitude_fit import bound_side, fit_magnitude
 from ornitail.gap.ranking import CandidateEvidence, rank_candidates
 from ornitail.gap.report_text import magnitude_text
@@ -94,6 +94,33 @@ def test_closure_interval_is_paired_over_runs():
     assert (
         closure == pytest.approx(0.5) and low == pytest.approx(0.5) and high == pytest.approx(0.5)
     )
+
+
+def _flight_energies(generator: np.random.Generator, runs: int) -> tuple[np.ndarray, np.ndarray]:
+    """Normalised squared residual per run before and after an effect that explains 90 % of its part: runs differ
+    in how much disturbance they hold (gamma, shape 2: 0.1-3 x the mean) and in how much the effect drives them."""
+    disturbance = generator.gamma(2.0, 50.0, runs)
+    explained = generator.gamma(4.0, 15.0, runs)
+    return disturbance + explained, disturbance + 0.1 * explained
+
+
+def test_the_fresh_data_interval_covers_a_new_flights_closure_at_its_nominal_rate():
+    """The truth is the closure of a second, independent flight of as many runs (not produced by the interval).
+    400 flights: the binomial standard error of a 90 % rate is 0.015, so 0.86-0.94 is +-2.7 of it; the test runs'
+    own bootstrap interval, which leaves out the new flight's scatter, covers about 0.75 and must stay below."""
+    runs, flights = 16, 400
+    inside = inside_test_runs_interval = 0
+    for seed in range(flights):
+        generator = np.random.default_rng(seed)
+        before, after = _flight_energies(generator, runs)
+        low, high = fresh_data_interval(before, after, seed)
+        _, (test_low, test_high) = closure_with_interval(before, after, seed)
+        new_before, new_after = _flight_energies(generator, runs)
+        new_closure = 1.0 - np.sqrt(new_after.sum() / new_before.sum())
+        inside += low <= new_closure <= high
+        inside_test_runs_interval += test_low <= new_closure <= test_high
+    assert 0.86 <= inside / flights <= 0.94
+    assert inside_test_runs_interval / flights < 0.82
 
 
 def test_a_magnitude_on_its_bound_is_reported_as_a_limit():
