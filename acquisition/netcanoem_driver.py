@@ -6,12 +6,33 @@ socketcan, pcan, kvaser or python-can's in-process ``virtual`` bus differ only b
 Threading
 ---------
 Queries (serial number, matrix, counts per unit, ...) run in the caller's thread and are refused
-while polling. :meth:`NetCanOemDriver.start_polling` starts one thread that sends a gauge request at
-the requested rate, waits for its two replies, and hands blocks of samples (:class:`GaugeBlock`,
+while polling. :meth:`NetCanOemDriver.start_polling` starts one thread that sends gauge requests at
+the requested rate (see Schedule), waits for the two replies of each, and hands blocks of samples (:class:`GaugeBlock`,
 about every ``block_period_s``) to a bounded queue read with :meth:`get_block` (a full queue drops
 the block and counts it). CAN error frames received are counted in :attr:`error_frames` and polling
 goes on; a bus error from python-can, or ``missed_replies_limit`` requests in a row without an
 answer, ends the thread with :class:`InstrumentDisconnected` (raised by ``get_block``).
+
+Schedule
+--------
+The board answers one request at a time (no streaming opcode, no documented request queue), so the poller keeps
+one request outstanding: it sends a gauge request, waits for both replies, then sends the next. Request k is due
+at ``start + k / rate`` (:class:`PollSchedule`): a request not yet due is waited for, a late one is sent at once,
+so a late wake-up or a slow round trip is made up by the requests after it (sent as fast as the replies come)
+and the rate holds on average whenever the host's round trip is shorter than the period. A poller more than
+``catch_up_limit_s`` (0.05 s) behind gives up: the schedule restarts at that request and the requests it never
+sent are counted in :attr:`requests_skipped`, so a long stall does not end in a burst. Counters:
+:attr:`requests_sent` = :attr:`samples_polled` (delivered) + :attr:`missed_replies` + :attr:`discarded_samples`
+(samples lost); requests never sent (the host could not keep up) are not lost samples.
+
+Measured on python-can's ``virtual`` bus against the simulated board (``benchmarks/netcanoem_ceiling.py``,
+2-core VM shared with other jobs): a round trip is a request and two replies exchanged by two Python threads
+(40-80 us for the bare frames), plus the simulated board's tunnel simulation for each sample (about 105 us at best,
+150-190 us when other jobs load the host) and the driver's own work (40-60 us of poller CPU per request, most of it in
+python-can); a ``time.sleep`` wakes 65-85 us late. Together they are close to the 253 us period of the 1 Mbit/s
+ceiling (3953 samples/s), so there the poller runs back to back and the rate is what the host's round trip
+allows: 3892 samples/s (98.5 % of the ceiling) at load 1.7, 66-95 % when other jobs slowed the round trip; see
+``benchmarks/README.md``.
 
 Foreign frames
 --------------
@@ -89,6 +110,39 @@ class GaugeBlock:
         return self.saturated.any(axis=1) | (self.status_words != 0)
 
 
+class PollSchedule:
+    """When the poller sends its gauge requests: ``1 / period_s`` requests per clock second on average.
+
+    Request k is due at ``start_s + k * period_s`` (clock seconds). The poller waits for a request that is not
+    yet due and sends a late one at once, so the requests after a late wake-up or a slow round trip follow one
+    another as fast as their replies come (one request outstanding, as the board answers one at a time) until
+    the schedule is met again. A request more than ``catch_up_limit_s`` late is not made up: the schedule
+    restarts at the time it is sent, and :meth:`sent` returns how many requests due before it were given up
+    (after a long stall the poller resynchronises instead of bursting).
+    """
+
+    def __init__(self, period_s: float, start_s: float, catch_up_limit_s: float) -> None:
+        self.period_s = period_s
+        self.catch_up_limit_s = catch_up_limit_s
+        self._start_s = start_s
+        self._index = 0
+
+    @property
+    def due_s(self) -> float:
+        """Clock time the next request is due, s."""
+        return self._start_s + self._index * self.period_s
+
+    def sent(self, now_s: float) -> int:
+        """Count the request sent at clock time ``now_s`` (s), at or after :attr:`due_s`; return the number of
+        earlier requests given up because it was more than ``catch_up_limit_s`` late (they will never be sent)."""
+        late_s = now_s - self.due_s
+        if late_s > self.catch_up_limit_s:
+            self._start_s, self._index = now_s, 1
+            return int(late_s // self.period_s)
+        self._index += 1
+        return 0
+
+
 class NetCanOemDriver:
     """Polls raw Nano-17 gauges from a NETCANOEM board and reads its calibration.
 
@@ -104,10 +158,16 @@ class NetCanOemDriver:
         Instrument name used in error messages.
     reply_timeout_s : float
         How long to wait for each reply, s.
+    catch_up_limit_s : float
+        A poller further behind its schedule than this resynchronises instead of making the lost time up,
+        clock s (:class:`PollSchedule`).
     clock : callable returning s
         Schedules the polls and stamps each sample (default ``time.monotonic``; the rig passes its rig time).
     time_scale : float
         Clock seconds per wall second (``clock`` of a simulated rig runs faster than the wall clock).
+    sleep : callable taking s, optional
+        Waits the given clock seconds (default ``time.sleep`` of them divided by ``time_scale``); a test passes
+        one that advances its fake clock.
     """
 
     def __init__(
@@ -122,11 +182,14 @@ class NetCanOemDriver:
         missed_replies_limit: int = 3,
         block_period_s: float = 0.01,
         queue_blocks: int = 2000,
+        catch_up_limit_s: float = 0.05,
         clock: Callable[[], float] = time.monotonic,
         time_scale: float = 1.0,
+        sleep: Callable[[float], None] | None = None,
     ) -> None:
         self._clock = clock
         self._time_scale = float(time_scale)
+        self._sleep = sleep if sleep is not None else self._wall_sleep
         self.interface = interface
         self.channel = channel
         self.bit_rate = float(bit_rate)
@@ -135,11 +198,15 @@ class NetCanOemDriver:
         self.reply_timeout_s = reply_timeout_s
         self.missed_replies_limit = missed_replies_limit
         self.block_period_s = block_period_s
+        self.catch_up_limit_s = catch_up_limit_s
         self.blocks: queue.Queue[GaugeBlock | None] = queue.Queue(maxsize=queue_blocks)
         self.blocks_dropped = 0
         self.error_frames = 0
         self.missed_replies = 0
+        self.requests_sent = 0  # gauge requests sent while polling
+        self.requests_skipped = 0  # requests due but never sent: given up on resynchronising
         self.samples_polled = 0
+        self.poller_cpu_s = 0.0  # the last polling thread's CPU time (time.thread_time), s
         self.foreign_frames = 0
         self.discarded_samples = 0
         self.saturated_samples = 0
@@ -240,14 +307,23 @@ class NetCanOemDriver:
         self.close()
 
     # -- request / reply --------------------------------------------------------------------
-    def _send(self, opcode: int, data: bytes = b"") -> None:
-        if self._bus is None:
-            raise RuntimeError(f"{self.name}: bus is not open; call open() first")
-        message = can.Message(
+    def _wall_sleep(self, clock_s: float) -> None:
+        time.sleep(clock_s / self._time_scale)
+
+    def _request(self, opcode: int, data: bytes = b"") -> can.Message:
+        return can.Message(
             arbitration_id=protocol.arbitration_id(self.base_id, opcode),
             is_extended_id=False,
             data=data,
         )
+
+    def _send(self, opcode: int, data: bytes = b"") -> None:
+        if self._bus is None:
+            raise RuntimeError(f"{self.name}: bus is not open; call open() first")
+        self._send_message(self._request(opcode, data))
+
+    def _send_message(self, message: can.Message) -> None:
+        assert self._bus is not None
         try:
             self._bus.send(message)
         except (can.CanError, OSError) as error:
@@ -309,8 +385,8 @@ class NetCanOemDriver:
             if self._is_board_frame(message):
                 self.foreign_frames += 1
 
-    def _receive_gauge_sample(self, timeout_s: float) -> tuple[int, np.ndarray] | None | bool:
-        """The two replies to one gauge request, in the board's order: ``(status, gauges)``; None on
+    def _receive_gauge_sample(self, timeout_s: float) -> tuple[bytes, bytes] | None | bool:
+        """The two replies to one gauge request, in the board's order: their payloads (8 and 6 bytes); None on
         timeout; False when a doubled reply made the sample ambiguous (discarded)."""
         assert self._bus is not None
         first: bytes | None = None
@@ -340,7 +416,7 @@ class NetCanOemDriver:
                 if ambiguous:
                     self.discarded_samples += 1
                     return False
-                return protocol.decode_gauge_replies(first, bytes(message.data))
+                return first, bytes(message.data)
             else:
                 self.foreign_frames += 1
 
@@ -503,26 +579,27 @@ class NetCanOemDriver:
         return block
 
     def _poll_loop(self, sample_rate_hz: float) -> None:
-        period_s = 1.0 / sample_rate_hz
-        times: list[float] = []
-        rows: list[tuple[int, np.ndarray]] = []
-        pending: tuple[float, tuple[int, np.ndarray]] | None = None  # confirmed by the next drain
-        next_request_s = self._clock()
-        last_block_s = next_request_s
+        schedule = PollSchedule(1.0 / sample_rate_hz, self._clock(), self.catch_up_limit_s)
+        request = self._request(protocol.OPCODE_READ_GAUGES)
+        samples = _SampleBuffer()
+        pending: tuple[float, bytes, bytes] | None = None  # confirmed by the next drain
+        last_block_s = schedule.due_s
         missed_in_a_row = 0
+        started_cpu_s = time.thread_time()
         try:
             while not self._stop_polling.is_set():
-                delay = next_request_s - self._clock()
+                delay = schedule.due_s - self._clock()
                 if delay > 0:
-                    time.sleep(delay / self._time_scale)
-                self._confirm(pending, times, rows)
+                    self._sleep(delay)
+                self._confirm(pending, samples)
                 pending = None
-                if times and times[-1] - last_block_s >= self.block_period_s:
-                    self._deliver(times, rows)
-                    times, rows, last_block_s = [], [], times[-1]
+                if samples.times and samples.times[-1] - last_block_s >= self.block_period_s:
+                    last_block_s = samples.times[-1]
+                    self._deliver(samples)
                 sent_s = self._clock()
-                next_request_s = max(next_request_s + period_s, sent_s)
-                self._send(protocol.OPCODE_READ_GAUGES)
+                self.requests_skipped += schedule.sent(sent_s)
+                self._send_message(request)
+                self.requests_sent += 1
                 sample = self._receive_gauge_sample(self.reply_timeout_s)
                 if sample is False:
                     missed_in_a_row = 0  # the board answered; a foreign frame spoiled the sample
@@ -538,21 +615,18 @@ class NetCanOemDriver:
                         )
                     continue
                 missed_in_a_row = 0
-                pending = (sent_s, sample)
-            self._confirm(pending, times, rows)
-            self._deliver(times, rows)
+                pending = (sent_s, *sample)
+            self._confirm(pending, samples)
+            self._deliver(samples)
         except InstrumentDisconnected as error:
-            self._deliver(times, rows)
+            self._deliver(samples)
             self._failure = error
             with contextlib.suppress(queue.Full):
                 self.blocks.put_nowait(None)
+        finally:
+            self.poller_cpu_s = time.thread_time() - started_cpu_s
 
-    def _confirm(
-        self,
-        pending: tuple[float, tuple[int, np.ndarray]] | None,
-        times: list[float],
-        rows: list[tuple[int, np.ndarray]],
-    ) -> None:
+    def _confirm(self, pending: tuple[float, bytes, bytes] | None, samples: _SampleBuffer) -> None:
         """Drain the frames waiting before the next request; keep the last sample only if none has the board's
         ids (the board answers a request exactly once: an extra pair means one of the two was foreign)."""
         foreign_before = self.foreign_frames
@@ -562,26 +636,43 @@ class NetCanOemDriver:
         if self.foreign_frames != foreign_before:
             self.discarded_samples += 1
             return
-        times.append(pending[0])
-        rows.append(pending[1])
+        samples.times.append(pending[0])
+        samples.first_replies.append(pending[1])
+        samples.second_replies.append(pending[2])
         self.samples_polled += 1
 
-    def _deliver(self, times: list[float], rows: list[tuple[int, np.ndarray]]) -> None:
-        if not rows:
+    def _deliver(self, samples: _SampleBuffer) -> None:
+        """Decode the buffered samples into one block, queue it and empty the buffer."""
+        if not samples.times:
             return
-        gauges = np.vstack([gauges for _, gauges in rows])
+        status_words, gauges = protocol.decode_gauge_reply_batch(
+            b"".join(samples.first_replies), b"".join(samples.second_replies)
+        )
         block = GaugeBlock(
-            host_time_s=np.asarray(times),
-            status_words=np.array([status for status, _ in rows], dtype=np.uint16),
+            host_time_s=np.asarray(samples.times),
+            status_words=status_words,
             gauges=gauges,
             saturated=protocol.saturated_gauges(gauges),
         )
+        samples.clear()
         self.saturated_samples += int(np.count_nonzero(block.saturated.any(axis=1)))
         self.status_flagged_samples += int(np.count_nonzero(block.status_words != 0))
         try:
             self.blocks.put_nowait(block)
         except queue.Full:
             self.blocks_dropped += 1
+
+
+class _SampleBuffer:
+    """Samples polled since the last block: send times (clock s) and the raw reply payloads."""
+
+    def __init__(self) -> None:
+        self.times: list[float] = []
+        self.first_replies: list[bytes] = []
+        self.second_replies: list[bytes] = []
+
+    def clear(self) -> None:
+        self.times, self.first_replies, self.second_replies = [], [], []
 
 
 _GAUGE_REPLIES = {protocol.OPCODE_READ_GAUGES: 8, protocol.OPCODE_GAUGES_SECOND_REPLY: 6}

@@ -71,7 +71,7 @@ def split_arbitration_id(identifier: int) -> tuple[int, int]:
 
 def encode_gauge_replies(status_word: int, gauges: np.ndarray) -> tuple[bytes, bytes]:
     """Encode the two replies to a gauge read: 8 bytes (status, g0, g2, g4) and 6 (g1, g3, g5)."""
-    g = [int(value) for value in np.asarray(gauges, dtype=np.int64)]
+    g = np.asarray(gauges, dtype=np.int64).tolist()
     return (
         struct.pack(">Hhhh", status_word & 0xFFFF, g[0], g[2], g[4]),
         struct.pack(">hhh", g[1], g[3], g[5]),
@@ -85,6 +85,24 @@ def decode_gauge_replies(first: bytes, second: bytes) -> tuple[int, np.ndarray]:
     status_word, g0, g2, g4 = struct.unpack(">Hhhh", first)
     g1, g3, g5 = struct.unpack(">hhh", second)
     return status_word, np.array([g0, g1, g2, g3, g4, g5], dtype=np.int16)
+
+
+def decode_gauge_reply_batch(
+    first_replies: bytes, second_replies: bytes
+) -> tuple[np.ndarray, np.ndarray]:
+    """Decode n gauge samples at once: ``first_replies`` is n 8-byte first replies joined, ``second_replies``
+    the n 6-byte second replies joined. Returns status words (n,) uint16 and gauges (n, 6) int16, each row as
+    :func:`decode_gauge_replies` decodes it."""
+    if len(first_replies) % 8 or len(second_replies) != len(first_replies) // 8 * 6:
+        raise ValueError(
+            f"{len(first_replies)} and {len(second_replies)} bytes are not n 8-byte and n 6-byte replies"
+        )
+    first = np.frombuffer(first_replies, dtype=">i2").reshape(-1, 4)
+    second = np.frombuffer(second_replies, dtype=">i2").reshape(-1, 3)
+    gauges = np.empty((len(first), 6), dtype=np.int16)
+    gauges[:, 0::2] = first[:, 1:]
+    gauges[:, 1::2] = second
+    return first[:, 0].astype(np.uint16), gauges
 
 
 def saturated_gauges(gauges: np.ndarray) -> np.ndarray:

@@ -14,13 +14,22 @@ guaranteed whatever the data.
 The script starts the simulated board (:class:`SimulatedNetCanOemBoard`, fed by the tunnel simulator at time scale
 1) on python-can's in-process ``virtual`` bus, polls it with the real :class:`NetCanOemDriver` at each rate asked
 for, and reports the achieved rate (samples delivered per second of polling), its ratio to both ceilings and the
-accounting: requests sent = samples delivered + requests without a reply + samples discarded for a foreign frame.
-The board's own count of the requests it answered closes the books (delivered + discarded <= answered <= delivered +
-discarded + no reply: a reply later than the driver's 1 s timeout is a "no reply" the board did answer). The
-driver sends its next request at ``max(previous + period, now)``: a late wake-up of its thread is not made up, so
-what the host cannot sustain shows as requests never sent ("short"), not as lost samples.
-The virtual bus is a Python queue, not a wire: what limits it is the host (two Python threads exchanging three
-frames per sample), so the achieved rate says what this machine sustains, not what a CAN adapter would.
+accounting: requests sent = samples delivered + samples lost (requests without a reply + samples discarded for a
+foreign frame), and requests never sent (the poller could not keep up; those it gave up on when it resynchronised
+after falling more than its catch-up limit behind are counted apart). The board's own count of the requests it
+answered closes the books (delivered + discarded <= answered <= delivered + discarded + no reply: a reply later than
+the driver's timeout is a "no reply" the board did answer).
+
+The virtual bus is a Python queue, not a wire: two Python threads (the poller and the board) exchange three frames
+per sample under one interpreter lock, and the board runs the tunnel simulator for every request. So the script
+measures, in the same process, before and after the polling runs, what this host allows:
+
+- the transport floor: round trips per second of the same three frames between two bare threads (a responder that
+  sends two prebuilt replies; no board, no driver);
+- the host's round trip: back-to-back gauge requests per second from a bare requester (send, two receives, no
+  checks) to the simulated board. No poller with one request outstanding can go faster on this host; the driver's
+  rate is reported as a ratio of it as well as of the bus ceiling. The baseline runs at other moments than the
+  polling, so on a host whose load changes a run can come out above it: compare the before and after halves.
 
 Usage: ``benchmarks/README.md``. Exit code 0 when the fastest rate asked for reached ``--target`` of the ceiling
 without stuffing, 1 otherwise, 2 for a bad option.
@@ -31,10 +40,13 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import threading
 import time
 import uuid
 import warnings
 from typing import Any
+
+import can
 
 from ornitail.acquisition import netcanoem_protocol as protocol
 from ornitail.acquisition.netcanoem_driver import NetCanOemDriver
@@ -62,14 +74,96 @@ def ceilings(bit_rate: float = BIT_RATE) -> dict[str, float | int]:
     }
 
 
-def poll(rate_hz: float, seconds: float) -> dict[str, Any]:
-    """Poll the simulated board at ``rate_hz`` for ``seconds`` of wall time; achieved rate and accounting."""
+def _board(channel: str) -> SimulatedNetCanOemBoard:
+    """A started simulated board on ``channel``, fed by a fresh tunnel simulator in real time."""
     calibration = AtiCalibration.from_file(CALIBRATION)
     signals = SharedTunnelSignals.from_simulator(seed=0)
-    channel = f"ceiling-{uuid.uuid4().hex[:8]}"
-    board = SimulatedNetCanOemBoard(
+    return SimulatedNetCanOemBoard(
         signals, SimulatedClock(1.0), calibration.matrix_si, channel=channel
     ).start()
+
+
+def _back_to_back_round_trips_hz(requester: can.BusABC, seconds: float) -> float:
+    """Send gauge requests back to back on ``requester`` for ``seconds``, reading the two replies of each and
+    checking nothing; round trips per second."""
+    request = can.Message(
+        arbitration_id=protocol.arbitration_id(
+            protocol.DEFAULT_BASE_ID, protocol.OPCODE_READ_GAUGES
+        ),
+        is_extended_id=False,
+    )
+    round_trips = 0
+    started = time.perf_counter()
+    end = started + seconds
+    while time.perf_counter() < end:
+        requester.send(request)
+        if requester.recv(1.0) is None or requester.recv(1.0) is None:
+            raise RuntimeError("no reply within 1 s to a back-to-back request")
+        round_trips += 1
+    return round_trips / (time.perf_counter() - started)
+
+
+def transport_round_trip_hz(seconds: float) -> float:
+    """Round trips per second of a request (DLC 0) and two replies (DLC 8, 6) between two bare Python threads on
+    the virtual bus, the responder sending prebuilt replies: python-can's floor on this host."""
+    channel = f"floor-{uuid.uuid4().hex[:8]}"
+    requester = can.Bus(interface="virtual", channel=channel)
+    responder = can.Bus(interface="virtual", channel=channel)
+    replies = [
+        can.Message(
+            arbitration_id=protocol.arbitration_id(protocol.DEFAULT_BASE_ID, opcode),
+            is_extended_id=False,
+            data=bytes(length),
+        )
+        for opcode, length in (
+            (protocol.OPCODE_READ_GAUGES, 8),
+            (protocol.OPCODE_GAUGES_SECOND_REPLY, 6),
+        )
+    ]
+    stop = threading.Event()
+
+    def respond() -> None:
+        while not stop.is_set():
+            if responder.recv(0.05) is not None:
+                for reply in replies:
+                    responder.send(reply)
+
+    thread = threading.Thread(target=respond, daemon=True)
+    thread.start()
+    try:
+        return _back_to_back_round_trips_hz(requester, seconds)
+    finally:
+        stop.set()
+        thread.join()
+        requester.shutdown()
+        responder.shutdown()
+
+
+def board_round_trip_hz(seconds: float) -> float:
+    """Gauge requests per second a bare requester gets answered by the simulated board, back to back: the most a
+    poller with one request outstanding can reach on this host."""
+    channel = f"round-trip-{uuid.uuid4().hex[:8]}"
+    board = _board(channel)
+    requester = can.Bus(interface="virtual", channel=channel)
+    try:
+        return _back_to_back_round_trips_hz(requester, seconds)
+    finally:
+        requester.shutdown()
+        board.close()
+
+
+def baseline(seconds: float) -> dict[str, float]:
+    """Transport floor and host round trip, samples/s, each measured for ``seconds``."""
+    return {
+        "transport_round_trip_hz": transport_round_trip_hz(seconds),
+        "board_round_trip_hz": board_round_trip_hz(seconds),
+    }
+
+
+def poll(rate_hz: float, seconds: float) -> dict[str, Any]:
+    """Poll the simulated board at ``rate_hz`` for ``seconds`` of wall time; achieved rate and accounting."""
+    channel = f"ceiling-{uuid.uuid4().hex[:8]}"
+    board = _board(channel)
     driver = NetCanOemDriver(interface="virtual", channel=channel, bit_rate=BIT_RATE)
     delivered = 0
     first_s = last_s = None
@@ -106,12 +200,16 @@ def poll(rate_hz: float, seconds: float) -> dict[str, Any]:
         "of_ceiling_worst_case_stuffing": achieved / limits["ceiling_worst_case_stuffing_hz"],
         "samples_delivered": delivered,
         "samples_polled": driver.samples_polled,
+        "requests_sent": driver.requests_sent,
         "requests_answered_by_board": answered,
+        "samples_lost": driver.requests_sent - delivered,
         "requests_without_reply": driver.missed_replies,
         "samples_discarded": driver.discarded_samples,
         "foreign_frames": driver.foreign_frames,
         "blocks_dropped": driver.blocks_dropped,
-        "requests_short_of_rate": max(0, round(rate_hz * span_s) + 1 - delivered),
+        "requests_never_sent": max(0, round(rate_hz * span_s) + 1 - driver.requests_sent),
+        "requests_skipped_on_resync": driver.requests_skipped,
+        "poller_cpu_us_per_request": driver.poller_cpu_s / max(driver.requests_sent, 1) * 1e6,
     }
 
 
@@ -126,15 +224,44 @@ def main(argv: list[str] | None = None) -> int:
         help="polling rates to try, samples/s",
     )
     parser.add_argument("--seconds", type=float, default=5.0, help="wall seconds per rate")
+    parser.add_argument(
+        "--baseline-s",
+        type=float,
+        default=2.0,
+        help="wall seconds of each round-trip baseline, half before the runs and half after",
+    )
     parser.add_argument("--target", type=float, default=0.95, help="fraction of the ceiling")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead")
     options = parser.parse_args(argv)
-    if options.seconds <= 0 or any(not 0 < rate <= limits["ceiling_hz"] for rate in options.rates):
-        parser.error(f"--seconds must be > 0 and every rate in (0, {limits['ceiling_hz']:.0f}]")
+    if (
+        options.seconds <= 0
+        or options.baseline_s <= 0
+        or any(not 0 < rate <= limits["ceiling_hz"] for rate in options.rates)
+    ):
+        parser.error(
+            f"--seconds and --baseline-s must be > 0 and every rate in (0, {limits['ceiling_hz']:.0f}]"
+        )
+    before = baseline(options.baseline_s / 2)
     results = [poll(rate, options.seconds) for rate in options.rates]
+    after = baseline(options.baseline_s / 2)
+    host = {key: (before[key] + after[key]) / 2 for key in before}
+    host["board_round_trip_of_ceiling"] = host["board_round_trip_hz"] / limits["ceiling_hz"]
+    for run in results:
+        run["of_host_round_trip"] = run["achieved_hz"] / host["board_round_trip_hz"]
     met = results[-1]["of_ceiling"] >= options.target
     if options.json:
-        print(json.dumps({"ceilings": limits, "runs": results, "target_met": met}))
+        print(
+            json.dumps(
+                {
+                    "ceilings": limits,
+                    "host": host,
+                    "host_before": before,
+                    "host_after": after,
+                    "runs": results,
+                    "target_met": met,
+                }
+            )
+        )
         return 0 if met else 1
     print(
         f"classic CAN at {limits['bit_rate']:.0f} bit/s: {limits['bits_per_sample']} bits per sample "
@@ -143,14 +270,23 @@ def main(argv: list[str] | None = None) -> int:
         f"{limits['ceiling_worst_case_stuffing_hz']:.0f} samples/s"
     )
     print(
-        "requested/s  achieved/s  of ceiling  of stuffed ceiling  delivered  no reply  discarded  short"
+        f"this host: transport floor {host['transport_round_trip_hz']:.0f} round trips/s "
+        f"(before {before['transport_round_trip_hz']:.0f}, after {after['transport_round_trip_hz']:.0f}); "
+        f"round trip with the simulated board {host['board_round_trip_hz']:.0f}/s "
+        f"(before {before['board_round_trip_hz']:.0f}, after {after['board_round_trip_hz']:.0f}) = "
+        f"{host['board_round_trip_of_ceiling']:.1%} of the ceiling"
+    )
+    print(
+        "requested/s  achieved/s  of ceiling  of stuffed ceiling  of host round trip  delivered  lost "
+        "(no reply, discarded)  never sent (skipped on resync)  poller CPU us/request"
     )
     for run in results:
         print(
             f"{run['requested_hz']:11.0f}  {run['achieved_hz']:10.0f}  {run['of_ceiling']:10.1%}  "
-            f"{run['of_ceiling_worst_case_stuffing']:18.1%}  {run['samples_delivered']:9d}  "
-            f"{run['requests_without_reply']:8d}  {run['samples_discarded']:9d}  "
-            f"{run['requests_short_of_rate']:5d}"
+            f"{run['of_ceiling_worst_case_stuffing']:18.1%}  {run['of_host_round_trip']:18.1%}  "
+            f"{run['samples_delivered']:9d}  {run['samples_lost']:4d} ({run['requests_without_reply']}, "
+            f"{run['samples_discarded']}){'':12}  {run['requests_never_sent']:10d} "
+            f"({run['requests_skipped_on_resync']}){'':14}  {run['poller_cpu_us_per_request']:.0f}"
         )
     print(
         f"target {options.target:.0%} of the ceiling at the fastest rate: {'met' if met else 'not met'}"

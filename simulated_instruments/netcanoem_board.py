@@ -121,8 +121,10 @@ class SimulatedNetCanOemBoard(SimulatedDevice):
             self._answer(opcode, bytes(message.data))
 
     def _send(self, opcode: int, data: bytes) -> None:
-        with self._lock:
-            error_frames, self._pending_error_frames = self._pending_error_frames, 0
+        error_frames = 0
+        if self._pending_error_frames:  # read without the lock: the common case has none to send
+            with self._lock:
+                error_frames, self._pending_error_frames = self._pending_error_frames, 0
         for _ in range(error_frames):
             self._bus.send(
                 can.Message(is_error_frame=True, arbitration_id=0x20000004, is_extended_id=True)
@@ -164,7 +166,8 @@ class SimulatedNetCanOemBoard(SimulatedDevice):
     def _gauge_counts(self) -> np.ndarray:
         volts = self.signals.sample_at(self.clock.now_s())[:6]
         counts = np.clip(np.rint(volts / GAUGE_VOLTS_PER_COUNT), -32768, 32767).astype(np.int16)
-        with self._lock:
-            for index, value in self._forced_gauges.items():
-                counts[index] = value
+        if self._forced_gauges:  # read without the lock: the common case forces none
+            with self._lock:
+                for index, value in self._forced_gauges.items():
+                    counts[index] = value
         return counts

@@ -1,14 +1,17 @@
 """NETCANOEM: identifiers and payloads, the CAN rate ceiling, the driver on a virtual bus."""
 
 import struct
+import threading
 import time
+import uuid
 
+import can
 import numpy as np
 import pytest
 
 from ornitail.acquisition import netcanoem_protocol as protocol
 from ornitail.acquisition.instrument_errors import InstrumentDisconnected
-from ornitail.acquisition.netcanoem_driver import NetCanOemDriver
+from ornitail.acquisition.netcanoem_driver import NetCanOemDriver, PollSchedule
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.core.errors import UserInputError
 from ornitail.simulated_instruments.netcanoem_board import GAUGE_VOLTS_PER_COUNT
@@ -209,3 +212,191 @@ def test_bus_error_while_polling_raises_disconnected(simulated_netcanoem):
             driver.get_block(timeout_s=1.0)
     driver._bus = None
     driver.close()
+
+
+# -- the poller's schedule: catch-up and resynchronisation, on a fake clock ----------------------
+
+
+class FakeTime:
+    """Clock seconds that pass only when the poller sleeps or a scripted board takes time to answer."""
+
+    def __init__(self) -> None:
+        self.now_s = 0.0
+
+    def clock(self) -> float:
+        return self.now_s
+
+    def sleep(self, seconds: float) -> None:
+        self.now_s += seconds
+
+
+class TimedBoard:
+    """Answers gauge request k (gauge 0 = k) after ``round_trip_s(k)`` of fake time, on its own virtual bus.
+
+    The fake time advances before the replies go out, so the poller reads it only once the round trip is over:
+    the send times the poller stamps depend on the script alone, not on thread timing.
+    """
+
+    def __init__(self, channel: str, fake_time: FakeTime, round_trip_s) -> None:
+        self.bus = can.Bus(interface="virtual", channel=channel)
+        self.fake_time = fake_time
+        self.round_trip_s = round_trip_s
+        self.requests = 0
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def send(self, opcode: int, data: bytes) -> None:
+        self.bus.send(
+            can.Message(
+                arbitration_id=protocol.arbitration_id(protocol.DEFAULT_BASE_ID, opcode),
+                is_extended_id=False,
+                data=data,
+            )
+        )
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            message = self.bus.recv(0.05)
+            if message is None:
+                continue
+            opcode = protocol.split_arbitration_id(message.arbitration_id)[1]
+            if opcode == protocol.OPCODE_SERIAL_NUMBER:
+                self.send(opcode, protocol.encode_serial_number("FT8884"))
+                continue
+            k = self.requests
+            self.requests += 1
+            self.fake_time.now_s += self.round_trip_s(k)
+            first, second = protocol.encode_gauge_replies(0, np.array([k % 32768, 0, 0, 0, 0, 0]))
+            self.send(protocol.OPCODE_READ_GAUGES, first)
+            self.send(protocol.OPCODE_GAUGES_SECOND_REPLY, second)
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join()
+        self.bus.shutdown()
+
+
+def poll_on_fake_clock(rate_hz: float, round_trip_s, samples: int):
+    """Poll a TimedBoard at ``rate_hz`` until ``samples`` arrived: (request numbers, send times s, driver)."""
+    fake_time = FakeTime()
+    channel = f"ornitail-schedule-{uuid.uuid4().hex[:8]}"
+    board = TimedBoard(channel, fake_time, round_trip_s)
+    driver = NetCanOemDriver(
+        interface="virtual",
+        channel=channel,
+        reply_timeout_s=10.0,  # wall seconds: a loaded host must not turn a slow thread into a missed reply
+        clock=fake_time.clock,
+        sleep=fake_time.sleep,
+    )
+    blocks = []
+    try:
+        driver.open()
+        driver.start_polling(rate_hz)
+        while sum(len(block.host_time_s) for block in blocks) < samples:
+            block = driver.get_block(timeout_s=10.0)
+            assert block is not None
+            blocks.append(block)
+        driver.stop_polling()
+    finally:
+        driver.close()
+        board.close()
+    numbers = np.concatenate([block.gauges[:, 0] for block in blocks])[:samples]
+    times = np.concatenate([block.host_time_s for block in blocks])[:samples]
+    return numbers.tolist(), times, driver
+
+
+def test_poller_makes_up_a_stall_shorter_than_the_catch_up_limit():
+    # 1000/s, round trips of 0.4 ms, request 10 stalls 5 ms: requests 11..18 are late and go back to back (one
+    # outstanding, 0.4 ms apart) until request 19 is on time again; every sample k >= 19 is sent at k ms.
+    def round_trip_s(k):
+        return 5.4e-3 if k == 10 else 0.4e-3
+
+    numbers, times, driver = poll_on_fake_clock(1000.0, round_trip_s, 40)
+    assert numbers == list(range(40))
+    expected_ms = list(range(11)) + [15.4 + 0.4 * i for i in range(8)] + list(range(19, 40))
+    np.testing.assert_allclose(times, np.array(expected_ms) * 1e-3, rtol=0, atol=1e-9)
+    assert driver.requests_skipped == 0
+    assert driver.missed_replies == driver.discarded_samples == 0
+
+
+def test_poller_holds_the_rate_on_average_through_runs_of_round_trips_longer_than_the_period():
+    # In every 8 requests, 3 round trips of 1.6 ms then 5 of 0.2 ms: 0.725 ms a request on average, under the
+    # 1 ms period. The poller falls 3 x 0.6 ms behind and makes it up, so sample k is sent at k ms + at most
+    # 1.8 ms, for ever. Waiting a period after each late request, as `max(previous + period, now)` did, loses
+    # the time a request is more than a period late, and the lag grows without bound.
+    def round_trip_s(k):
+        return 1.6e-3 if k % 8 < 3 else 0.2e-3
+
+    numbers, times, driver = poll_on_fake_clock(1000.0, round_trip_s, 400)
+    assert numbers == list(range(400))
+    lag_s = times - np.arange(400) * 1e-3
+    assert lag_s.min() >= -1e-9
+    assert lag_s.max() <= 1.8e-3 + 1e-9
+    assert driver.requests_skipped == 0
+
+
+def test_poller_resynchronises_after_a_stall_longer_than_the_catch_up_limit():
+    # Request 10 stalls 100 ms, over the 50 ms limit: request 11 (due at 11 ms) goes out at 110.4 ms, the 99
+    # requests due before then are counted as skipped, and the schedule restarts there, one request a period,
+    # without a burst.
+    def round_trip_s(k):
+        return 100.4e-3 if k == 10 else 0.4e-3
+
+    numbers, times, driver = poll_on_fake_clock(1000.0, round_trip_s, 40)
+    assert numbers == list(range(40))
+    expected_ms = list(range(11)) + [110.4 + i for i in range(29)]
+    np.testing.assert_allclose(times, np.array(expected_ms) * 1e-3, rtol=0, atol=1e-9)
+    assert driver.requests_skipped == 99
+    # every slot of the schedule up to the first request after the stall was sent or skipped: 111 slots, 0..110 ms
+    assert numbers.index(11) + 1 + driver.requests_skipped == 111
+
+
+def test_requests_sent_are_delivered_samples_plus_requests_without_a_sample(simulated_netcanoem):
+    driver = NetCanOemDriver(interface="virtual", channel=simulated_netcanoem.channel)
+    driver.open()
+    try:
+        driver.start_polling(500.0)
+        assert driver.get_block(timeout_s=2.0) is not None
+        driver.stop_polling()
+    finally:
+        driver.close()
+    lost = driver.missed_replies + driver.discarded_samples
+    assert driver.requests_sent == driver.samples_polled + lost > 0
+
+
+@pytest.mark.parametrize(
+    ("late_s", "skipped", "next_due_s"),
+    [
+        (0.0, 0, 0.002),  # on time
+        (0.0015, 0, 0.002),  # late within the limit: the next request keeps its slot
+        (0.0049, 0, 0.002),  # just within the limit: still made up
+        (
+            0.0051,
+            5,
+            0.0071,
+        ),  # over it: 5 whole periods given up, the schedule restarts at the send (6.1 ms)
+    ],
+)
+def test_schedule_counts_the_slots_it_gives_up(late_s, skipped, next_due_s):
+    schedule = PollSchedule(period_s=0.001, start_s=0.0, catch_up_limit_s=0.005)
+    assert schedule.sent(0.0) == 0
+    assert schedule.due_s == 0.001
+    assert schedule.sent(0.001 + late_s) == skipped
+    assert schedule.due_s == pytest.approx(next_due_s, abs=1e-12)
+
+
+def test_batch_decode_matches_the_decoding_of_each_sample():
+    gauges = np.array([[1, -2, 300, -32768, 32767, 0], [7, 6, 5, 4, 3, -1]])
+    replies = [
+        protocol.encode_gauge_replies(status, row)
+        for status, row in zip((0x8001, 0), gauges, strict=True)
+    ]
+    status_words, decoded = protocol.decode_gauge_reply_batch(
+        b"".join(first for first, _ in replies), b"".join(second for _, second in replies)
+    )
+    assert status_words.dtype == np.uint16 and decoded.dtype == np.int16
+    assert status_words.tolist() == [0x8001, 0]
+    assert decoded.tolist() == gauges.tolist()
+    with pytest.raises(ValueError):
+        protocol.decode_gauge_reply_batch(replies[0][0], b"")

@@ -23,7 +23,9 @@ def test_ceiling_is_the_frame_layouts_bits_at_one_megabit():
 def test_every_request_is_a_delivered_sample_or_counted_as_lost():
     printed = io.StringIO()
     with contextlib.redirect_stdout(printed):
-        exit_code = netcanoem_ceiling.main(["--rates", "1000", "--seconds", "0.5", "--json"])
+        exit_code = netcanoem_ceiling.main(
+            ["--rates", "1000", "--seconds", "0.5", "--baseline-s", "0.2", "--json"]
+        )
     result = json.loads(printed.getvalue())
     run = result["runs"][0]
     assert exit_code == (0 if result["target_met"] else 1)
@@ -37,3 +39,14 @@ def test_every_request_is_a_delivered_sample_or_counted_as_lost():
     assert accounted <= run["requests_answered_by_board"]
     assert run["requests_answered_by_board"] <= accounted + run["requests_without_reply"]
     assert run["of_ceiling"] == run["achieved_hz"] / result["ceilings"]["ceiling_hz"]
+    # every request sent is a delivered sample or a lost one (no reply, or discarded); requests the poller never
+    # sent are counted apart, and those it gave up on when resynchronising are among them
+    assert run["requests_sent"] == run["samples_delivered"] + run["samples_lost"]
+    assert run["samples_lost"] == run["requests_without_reply"] + run["samples_discarded"]
+    assert run["requests_skipped_on_resync"] >= 0
+    host = result["host"]
+    assert host["transport_round_trip_hz"] > 0 and host["board_round_trip_hz"] > 0
+    assert run["of_host_round_trip"] == run["achieved_hz"] / host["board_round_trip_hz"]
+    assert host["board_round_trip_of_ceiling"] == (
+        host["board_round_trip_hz"] / result["ceilings"]["ceiling_hz"]
+    )
