@@ -274,6 +274,10 @@ class Recorder:
         self.catalog_synced: bool | None = None
         """After the run: True if its stop record reached the catalog, False if the catalog stayed locked (the
         next reconcile brings the row up to date), None without a catalog."""
+        self.exit_status: str | None = None
+        """After the run: its exit status as written in the stop record (None while it runs)."""
+        self.exit_reason: str | None = None
+        """After the run: why it did not complete, as written in the stop record."""
         self._current_metadata: dict[str, Any] = {}
         self._run_lock = RunLock(self.run_directory)
         self._samples_file: h5py.File | None = None
@@ -560,6 +564,7 @@ class Recorder:
             if self._writer_error is not None:
                 writer_text = f"writer: {type(self._writer_error).__name__}: {self._writer_error}"
                 status, reason = EXIT_STATUS_FAILED, _joined(reason, writer_text)
+            self.exit_status, self.exit_reason = status, reason
             try:
                 self._write_metadata(status, reason, utc_now_iso())
                 self._update_catalog()

@@ -21,6 +21,9 @@ and the sweep goes on; its run and the sweep end as ``incomplete`` naming it, an
 again. A record with saturated or over-range samples is kept, with a warning (processing refuses it).
 
 Whatever happens, motor and fan are brought to a safe state and every completed set point stays on disk.
+
+Every run emits its start, set point and stop documents (:mod:`ornitail.acquisition.run_documents`) to the
+subscribers of the ``documents`` dispatcher given to :func:`run_sweep`; the stop document whatever ends the run.
 """
 
 from __future__ import annotations
@@ -49,6 +52,7 @@ from ornitail.acquisition.recording_layout import (
     SetPointRecord,
 )
 from ornitail.acquisition.rig import Rig
+from ornitail.acquisition.run_documents import DocumentDispatcher, documented_run
 from ornitail.acquisition.run_files import read_journal, run_is_live
 from ornitail.acquisition.set_point_recording import (
     MAX_RETAKES,
@@ -341,6 +345,7 @@ class _SweepContext:
     on_event: Callable[[SweepEvent], None]
     completed: int
     stream: LiveBalance
+    documents: DocumentDispatcher
     durations_s: list[float] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     lossy_points: dict[int, str] = field(default_factory=dict)  # plan index -> what it lost
@@ -464,14 +469,22 @@ def _run_tail_state(
         plan_name=plan.name,
         resumed_from_run_id=previous_run_id,
     )
-    with Recorder(
+    rig_description = rig.recording_description()
+    recorder = Recorder(
         data_root,
         configuration,
         layout,
-        rig_description=rig.recording_description(),
+        rig_description=rig_description,
         calibration_files=rig.calibration_files(),
         display_decimation=None,
-    ) as recorder:
+    )
+    with documented_run(
+        recorder,
+        context.documents,
+        plan_name=plan.name,
+        rig_description=rig_description,
+        set_points_planned=len(points),
+    ) as documents:
         run_directories.append(recorder.run_directory)
         stream = context.stream
         if not stream.running or stream.sample_rate_hz != plan.sample_rate_hz:
@@ -494,6 +507,7 @@ def _run_tail_state(
                 record = record_set_point(
                     context, recorder, point, context.plan.sample_rate_hz, settle_s
                 )
+                documents.set_point(record)
                 if record.samples_missing_in_record:
                     context.lossy_points[point.index] = (
                         f"set point {point.label} lost {record.samples_missing_in_record} samples "
@@ -548,6 +562,7 @@ def run_sweep(
     on_event: Callable[[SweepEvent], None] | None = None,
     operator_prompt: Callable[[str], None] | None = None,
     balance_stream: LiveBalance | None = None,
+    documents: DocumentDispatcher | None = None,
 ) -> SweepResult:
     """Run ``plan`` on a connected ``rig``, recording under ``data_root``.
 
@@ -570,6 +585,9 @@ def run_sweep(
     balance_stream : LiveBalance, optional
         A balance stream that feeds a display (the GUI's); the sweep records through it and leaves it
         streaming. Without one the sweep streams the balance itself and stops it at the end.
+    documents : DocumentDispatcher, optional
+        Receives the start, set point and stop documents of every run the sweep records
+        (:mod:`ornitail.acquisition.run_documents`); the stop document whatever ends the run.
 
     Raises
     ------
@@ -606,6 +624,7 @@ def run_sweep(
         on_event or (lambda event: None),
         completed=len(done),
         stream=stream,
+        documents=documents or DocumentDispatcher(),
         recorded_before=done,
     )
     previous_run_id = chain[-1].name if chain else None

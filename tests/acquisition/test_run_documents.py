@@ -1,0 +1,183 @@
+"""Run documents: the dispatcher, a recorder's run framed by start and stop, and the documents of sweeps on the
+simulated rig (completed, aborted, failed), with a subscriber that raises on every document."""
+
+import pytest
+
+from ornitail.acquisition.recorder import Recorder
+from ornitail.acquisition.recording_layout import ChannelSpec, RunConfiguration, StreamLayout
+from ornitail.acquisition.recording_reader import load_recording
+from ornitail.acquisition.run_documents import (
+    DocumentDispatcher,
+    RunStart,
+    RunStop,
+    SetPointDocument,
+    documented_run,
+)
+from ornitail.acquisition.sweep import SweepStop, run_sweep
+from ornitail.acquisition.sweep_plan import plan_from_document
+
+SHORT_PLAN = {
+    "plan": {"name": "short"},
+    "configuration": {"tail_id": "S3", "x_h_mm": 98},
+    "steady_state": {"theta_deg": 25.0, "v_m_s": 0.8, "f_hz": 13.5},
+    "sweeps": {"theta_deg": [3.0], "v_m_s": [0.2]},
+    "protocol": {"steady_state_repeats": 1, "record_s": 0.6, "tailless_points": "steady_state"},
+    "settle": {"stable_for_s": 0.3, "timeout_s": 60},
+}
+
+
+@pytest.fixture
+def simulated_time_scale():
+    return 5.0  # as tests/acquisition/test_sweep.py: the fastest the serial DAQ's pty sustains
+
+
+def failing(name, document):
+    raise RuntimeError(f"subscriber broken on {name}")
+
+
+def collecting_dispatcher():
+    """A dispatcher whose first subscriber always raises and whose second keeps every (name, document)."""
+    dispatcher = DocumentDispatcher()
+    received = []
+    dispatcher.subscribe(failing)
+    dispatcher.subscribe(lambda name, document: received.append((name, document)))
+    return dispatcher, received
+
+
+def runs_of(received):
+    """The documents split per run, in the order received: one list of (name, document) per start."""
+    runs = []
+    for name, document in received:
+        if name == "start":
+            runs.append([])
+        runs[-1].append((name, document))
+    return runs
+
+
+def assert_framed_run(documents, directory):
+    """start, one set point document per journalled set point (in journal order), stop as in run.json."""
+    names = [name for name, _ in documents]
+    assert names == ["start"] + ["set_point"] * (len(names) - 2) + ["stop"]
+    start, stop = documents[0][1], documents[-1][1]
+    recording = load_recording(directory)
+    assert isinstance(start, RunStart) and isinstance(stop, RunStop)
+    assert start.run_id == stop.run_id == recording.run_id
+    assert start.run_directory == str(directory)
+    assert stop.exit_status == recording.status
+    set_points = [document for _, document in documents[1:-1]]
+    assert all(isinstance(document, SetPointDocument) for document in set_points)
+    assert [document.sequence for document in set_points] == list(range(1, len(set_points) + 1))
+    journal = recording.set_points_frame()
+    assert [document.plan_point_index for document in set_points] == [
+        int(index) for index in journal["plan_point_index"]
+    ]
+    assert [document.first_sample_index for document in set_points] == [
+        int(index) for index in journal["first_sample_index"]
+    ]
+    assert stop.set_points_recorded == len(set_points)
+    return start, set_points, stop
+
+
+def test_a_raising_subscriber_is_counted_and_the_others_still_receive():
+    dispatcher, received = collecting_dispatcher()
+    stop = RunStop("r", "completed", None, 0, "2026-01-01T00:00:00+00:00")
+    dispatcher.emit("stop", stop)
+    assert received == [("stop", stop)]
+    assert dispatcher.subscriber_failures == 1
+
+
+def test_an_unsubscribed_subscriber_receives_nothing_more():
+    dispatcher = DocumentDispatcher()
+    received = []
+    token = dispatcher.subscribe(lambda name, document: received.append(name))
+    stop = RunStop("r", "completed", None, 0, "2026-01-01T00:00:00+00:00")
+    dispatcher.emit("stop", stop)
+    dispatcher.unsubscribe(token)
+    dispatcher.unsubscribe(token)
+    dispatcher.emit("stop", stop)
+    assert received == ["stop"]
+
+
+@pytest.mark.parametrize(
+    ("error", "status"),
+    [(RuntimeError("disk on fire"), "failed"), (KeyboardInterrupt(), "aborted")],
+)
+def test_a_run_that_raises_still_emits_its_stop_document(tmp_path, error, status):
+    dispatcher, received = collecting_dispatcher()
+    recorder = Recorder(
+        tmp_path,
+        RunConfiguration(tail_id="S3", x_h_m=0.098, tailed=True, plan_name="manual"),
+        StreamLayout([ChannelSpec("gauge_0", "V")], sample_rate_hz=1000.0),
+        register_in_catalog=False,
+    )
+    with (
+        pytest.raises(type(error)),
+        documented_run(
+            recorder, dispatcher, plan_name="manual", rig_description={}, set_points_planned=1
+        ),
+    ):
+        raise error
+    assert [name for name, _ in received] == ["start", "stop"]
+    stop = received[-1][1]
+    assert stop.exit_status == status == load_recording(recorder.run_directory).status
+    assert stop.set_points_recorded == 0
+
+
+def test_a_completed_sweep_emits_start_set_points_and_stop_per_run_despite_a_raising_subscriber(
+    simulated_rig, tmp_path
+):
+    plan = plan_from_document(SHORT_PLAN, "short.toml")
+    dispatcher, received = collecting_dispatcher()
+    result = run_sweep(plan, simulated_rig, tmp_path, documents=dispatcher)
+    assert result.status == "completed"
+    runs = runs_of(received)
+    assert len(runs) == len(result.run_directories) == 2
+    for documents, directory in zip(runs, result.run_directories, strict=True):
+        start, _, stop = assert_framed_run(documents, directory)
+        assert stop.exit_status == "completed" and stop.reason is None
+        assert start.plan_name == "short"
+    tailed, tailless = (documents[0][1] for documents in runs)
+    assert tailed.configuration["tailed"] and not tailless.configuration["tailed"]
+    assert tailless.configuration["resumed_from_run_id"] == tailed.run_id
+    assert tailed.set_points_planned + tailless.set_points_planned == len(plan.set_points)
+    assert sum(len(documents) - 2 for documents in runs) == len(plan.set_points)
+    assert dispatcher.subscriber_failures == len(received)
+
+
+def test_an_aborted_sweep_ends_its_run_with_an_aborted_stop_document(simulated_rig, tmp_path):
+    plan = plan_from_document(SHORT_PLAN, "short.toml")
+    stop = SweepStop()
+    dispatcher, received = collecting_dispatcher()
+
+    def stop_after_two(name, document):  # the first Ctrl-C, as the second point is journalled
+        if name == "set_point" and document.sequence == 2:
+            stop.request()
+
+    dispatcher.subscribe(stop_after_two)
+    result = run_sweep(plan, simulated_rig, tmp_path, stop=stop, documents=dispatcher)
+    assert result.status == "aborted"
+    (documents,) = runs_of(received)
+    _, set_points, stop_document = assert_framed_run(documents, result.run_directories[0])
+    assert len(set_points) == 2
+    assert stop_document.exit_status == "aborted"
+    assert "stopped by the operator" in stop_document.reason
+
+
+def test_a_failed_sweep_ends_its_run_with_a_failed_stop_document(simulated_rig, tmp_path):
+    plan = plan_from_document(SHORT_PLAN, "short.toml")
+    dispatcher, received = collecting_dispatcher()
+
+    def unplug_the_fan(name, document):
+        if name == "set_point" and document.sequence == 2:
+            simulated_rig.simulators.fan.unplug()
+
+    dispatcher.subscribe(unplug_the_fan)
+    result = run_sweep(plan, simulated_rig, tmp_path, documents=dispatcher)
+    assert result.status == "failed"
+    (documents,) = runs_of(received)
+    _, set_points, stop_document = assert_framed_run(documents, result.run_directories[0])
+    assert len(set_points) == 2
+    assert stop_document.exit_status == "failed" and "fan" in stop_document.reason.lower()
+    simulated_rig.close(
+        raise_errors=False
+    )  # the fan is gone; the fixture's close would report it again
