@@ -1,13 +1,14 @@
-"""Benchmark: how well the ORNI-DAQ9 auxiliary board is aligned with the CAN balance on the host clock.
+"""Benchmark: how well the ORNI-DAQ9 auxiliary board is aligned with the CAN or Net F/T balance on the host clock.
 
-The packaged rig ``acquisition/data/simulated_rig_can_aux.toml`` runs in real time (time scale 1): the simulated
-NETCANOEM on python-can's virtual bus, polled by the real driver, and the simulated ORNI-DAQ9 on a pty whose crystal
-runs 80 ppm fast and whose counter starts at 1 234 567, read by the real driver; :class:`AlignedBalance` maps the
-board's counters to host time (:mod:`aux_clock_model`) and puts both on one grid. The simulator knows when it
-really took each sample, so the script measures the alignment error directly: once a second, the model's time of
-the newest auxiliary samples minus their true time. It also reports the estimate the stream records with each set
-point (``alignment_error_estimate_s``: the line's own uncertainty, without the transport's floor, which timestamps
-cannot see) and how often the true error stayed inside it.
+The packaged rig ``acquisition/data/simulated_rig_can_aux.toml`` (``--balance can``) runs in real time (time scale
+1): the simulated NETCANOEM on python-can's virtual bus, polled by the real driver, and the simulated ORNI-DAQ9 on a
+pty whose crystal runs 80 ppm fast and whose counter starts at 1 234 567, read by the real driver; with ``--balance
+netft`` the rig ``simulated_rig_netft_aux.toml`` streams the simulated Net F/T over UDP on the loopback instead.
+`AlignedBalance` maps the board's counters to host time (:mod:`aux_clock_model`) and puts both on one grid. The
+simulator knows when it really took each sample, so the script measures the alignment error directly: once a
+second, the model's time of the newest auxiliary samples minus their true time. It also reports the estimate the
+stream records with each set point (``alignment_error_estimate_s``: the line's own uncertainty, without the
+transport's floor, which timestamps cannot see) and how often the true error stayed inside it.
 
 Target: the worst error below one phase bin of the processed phase-resolved loads (1/50 of a flap at
 ``--flap-hz``, default the study's steady state 13.5 Hz: 1.48 ms; cycle means do not depend on the alignment at
@@ -27,20 +28,27 @@ from ornitail.acquisition.aligned_balance import AlignedBalance
 from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE
 
-RIG_FILE = DEFAULT_RIG_FILE.parent / "simulated_rig_can_aux.toml"
+RIG_FILES = {
+    "can": DEFAULT_RIG_FILE.parent / "simulated_rig_can_aux.toml",
+    "netft": DEFAULT_RIG_FILE.parent / "simulated_rig_netft_aux.toml",
+}
+"""The packaged rigs with an auxiliary board, by balance (``--balance``)."""
 
 
 PHASE_BINS = 50
 """Phase bins of ``balance.phase_loads.phase_averaged_loads`` (its default)."""
 
 
-def measure(duration_s: float, flap_hz: float = 13.5) -> dict[str, float | int | bool]:
-    """Stream ``duration_s`` wall seconds; the alignment error's statistics (s) and the recorded bounds."""
+def measure(
+    duration_s: float, flap_hz: float = 13.5, balance_name: str = "can"
+) -> dict[str, float | int | bool | str]:
+    """Stream ``duration_s`` wall seconds from the rig of ``balance_name`` (:data:`RIG_FILES`); the alignment
+    error's statistics (s) and the recorded bounds."""
     errors: list[np.ndarray] = []
     bounds: list[float] = []
     inside: list[bool] = []
     rows = 0
-    with Rig.from_file(RIG_FILE, time_scale=1.0) as rig:
+    with Rig.from_file(RIG_FILES[balance_name], time_scale=1.0) as rig:
         balance = rig.balance
         assert isinstance(balance, AlignedBalance)
         rig.set_flapping_frequency(flap_hz)
@@ -70,6 +78,7 @@ def measure(duration_s: float, flap_hz: float = 13.5) -> dict[str, float | int |
     phase_bin_s = 1.0 / flap_hz / PHASE_BINS
     inside_fraction = float(np.mean(inside)) if inside else 0.0
     return {
+        "balance": balance_name,
         "duration_s": duration_s,
         "rows": rows,
         "rows_lost": int(values.get("aligned_rows_lost", 0)),
@@ -92,6 +101,12 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration-s", type=float, default=30.0, help="wall seconds of streaming")
     parser.add_argument("--flap-hz", type=float, default=13.5, help="flapping frequency, Hz")
+    parser.add_argument(
+        "--balance",
+        choices=sorted(RIG_FILES),
+        default="can",
+        help="the balance beside the aux board",
+    )
     parser.add_argument("--json", action="store_true", help="one JSON object on stdout")
     arguments = parser.parse_args(argv)
     if not arguments.duration_s > 2.0:
@@ -100,7 +115,7 @@ def main(argv: list[str] | None = None) -> int:
     if not 1.0 <= arguments.flap_hz <= 16.0:
         print("--flap-hz: must be 1..16 Hz (the packaged rig's limit)", file=sys.stderr)
         return 2
-    result = measure(arguments.duration_s, arguments.flap_hz)
+    result = measure(arguments.duration_s, arguments.flap_hz, arguments.balance)
     if arguments.json:
         print(json.dumps(result))
     else:
