@@ -59,6 +59,9 @@ from ornitail.simulated_instruments.shared_signal_source import SharedTunnelSign
 BIT_RATE = 1_000_000
 """The board's default bit rate (opcode 0xE divisor 1), bit/s."""
 CALIBRATION = DEFAULT_RIG_FILE.parent / "calibration" / "FT8884.cal"
+SIGNAL_LOOKAHEAD_S = 0.004
+"""The simulated board's signals generated this far ahead, s (16 requests a call at the ceiling): without it the
+tunnel simulator's ~0.1 ms per call, not the driver, sets the host's round trip (``SharedTunnelSignals``)."""
 
 
 def ceilings(bit_rate: float = BIT_RATE) -> dict[str, float | int]:
@@ -77,7 +80,7 @@ def ceilings(bit_rate: float = BIT_RATE) -> dict[str, float | int]:
 def _board(channel: str) -> SimulatedNetCanOemBoard:
     """A started simulated board on ``channel``, fed by a fresh tunnel simulator in real time."""
     calibration = AtiCalibration.from_file(CALIBRATION)
-    signals = SharedTunnelSignals.from_simulator(seed=0)
+    signals = SharedTunnelSignals.from_simulator(seed=0, lookahead_s=SIGNAL_LOOKAHEAD_S)
     return SimulatedNetCanOemBoard(
         signals, SimulatedClock(1.0), calibration.matrix_si, channel=channel
     ).start()
