@@ -31,7 +31,8 @@ Measured on python-can's ``virtual`` bus against the simulated board (``benchmar
 150-190 us when other jobs load the host) and the driver's own work (40-60 us of poller CPU per request, most of it in
 python-can); a ``time.sleep`` wakes 65-85 us late. Together they are close to the 253 us period of the 1 Mbit/s
 ceiling (3953 samples/s), so there the poller runs back to back and the rate is what the host's round trip
-allows: 3892 samples/s (98.5 % of the ceiling) at load 1.7, 66-95 % when other jobs slowed the round trip; see
+allows: 66-98.5 % of the ceiling depending on other jobs. With the simulated board generating its signals 4 ms
+ahead (one simulator call per 16 requests) the driver held 3952 samples/s, 100 % of the ceiling, nothing lost; see
 ``benchmarks/README.md``.
 
 Foreign frames
