@@ -14,6 +14,9 @@ from ornitail.acquisition.recording_reader import load_recording
 
 REPOSITORY = Path(__file__).resolve().parents[2]
 ORNITAIL = str(Path(sys.executable).parent / "ornitail")
+FAST = "10"
+"""Time scale of the sweeps that are not interrupted: the plan's 2 kHz x 10 = 20 k frames/s on the pty (the
+interrupted sweep runs at 5 x, so that the second interrupt lands while a point is still being recorded)."""
 SHORT_PLAN = """
 [plan]
 name = "cli-short"
@@ -29,6 +32,7 @@ v_m_s = [-0.2, 0.2]
 [protocol]
 steady_state_repeats = 2
 record_s = 0.6
+sample_rate_hz = 2000.0
 [settle]
 stable_for_s = 0.3
 """
@@ -50,7 +54,7 @@ def run_ornitail(*arguments, **kwargs):
 def test_sweep_command_records_and_prints_one_json_object(tmp_path):
     plan = write_plan(tmp_path)
     completed = run_ornitail(
-        "sweep", str(plan), "--data-root", str(tmp_path / "data"), "--time-scale", "5", "--json"
+        "sweep", str(plan), "--data-root", str(tmp_path / "data"), "--time-scale", FAST, "--json"
     )
     assert completed.returncode == 0, completed.stderr
     result = json.loads(completed.stdout)
@@ -123,7 +127,14 @@ def test_two_interrupts_stop_at_once_with_the_run_aborted_and_its_data_kept(tmp_
     assert recording.status == "aborted"
     assert len(recording.set_points_frame()) >= 1
     resumed = run_ornitail(
-        "sweep", str(plan), "--data-root", str(data_root), "--time-scale", "5", "--resume", "--json"
+        "sweep",
+        str(plan),
+        "--data-root",
+        str(data_root),
+        "--time-scale",
+        FAST,
+        "--resume",
+        "--json",
     )
     assert resumed.returncode == 0, resumed.stderr
     assert json.loads(resumed.stdout)["completed_points"] == 8
@@ -140,7 +151,7 @@ def test_example_headless_script_runs_a_sweep(tmp_path):
             "--data-root",
             str(tmp_path / "data"),
             "--time-scale",
-            "5",
+            FAST,
         ],
         capture_output=True,
         text=True,
