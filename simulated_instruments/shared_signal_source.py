@@ -32,8 +32,9 @@ class SharedTunnelSignals:
         call costs about 0.1 ms of the simulator's fixed overhead, more than the driver's whole round trip; the
         NETCANOEM ceiling benchmark generates 4 ms ahead so that the driver, not the simulator, is measured.
         Samples generated ahead take an operating-point change up to ``lookahead_s`` late. The rig's simulated
-        instruments keep 0: with 4 ms the backend-agreement test failed twice in a row (X0 off by 3.7 sigma between
-        two backends) for a reason not found yet.
+        instruments keep 0: with 4 ms the backend-agreement test failed twice in a row (X0 3.7 sigma apart between
+        two backends); it then failed once without it too (its |z| <= 3 over 27 comparisons alarmed about once in
+        14 runs, since corrected), so the lookahead may be innocent, but it is not in the rig until that is checked.
     """
 
     def __init__(self, source: Any, sample_rate_hz: float, lookahead_s: float = 0.0) -> None:
