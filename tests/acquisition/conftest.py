@@ -11,8 +11,10 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 
+import can
 import pytest
 
+from ornitail.acquisition import netcanoem_protocol as protocol
 from ornitail.simulated_instruments.pty_transport import PseudoTerminalPair
 
 DEADLINE_S = 30.0
@@ -82,6 +84,54 @@ def scripted_device() -> Iterator[Callable[[list[tuple[int, bytes | None]]], Scr
     yield start
     for device in devices:
         device.__exit__(None, None, None)
+
+
+class ScriptedCanBoard:
+    """A NETCANOEM board played by a test on its own python-can virtual bus: it answers the serial-number query as
+    FT8884 and gauge request k (the k-th other request frame of DLC 0) with the frames ``answer(k)`` gives, in order
+    (a test's replies, foreign frames around them, a fake clock advanced first)."""
+
+    def __init__(self, channel: str, answer: Callable[[int], list[tuple[int, bytes]]]) -> None:
+        self.bus = can.Bus(interface="virtual", channel=channel)
+        self.answer = answer
+        self.requests = 0
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def send(self, opcode: int, data: bytes) -> None:
+        self.bus.send(
+            can.Message(
+                arbitration_id=protocol.arbitration_id(protocol.DEFAULT_BASE_ID, opcode),
+                is_extended_id=False,
+                data=data,
+            )
+        )
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            message = self.bus.recv(0.05)
+            if message is None or message.dlc != 0:
+                continue
+            opcode = protocol.split_arbitration_id(message.arbitration_id)[1]
+            if opcode == protocol.OPCODE_SERIAL_NUMBER:
+                self.send(opcode, protocol.encode_serial_number("FT8884"))
+                continue
+            k = self.requests
+            self.requests += 1
+            for reply_opcode, data in self.answer(k):
+                self.send(reply_opcode, data)
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join()
+        self.bus.shutdown()
+
+
+@pytest.fixture
+def scripted_can_board() -> type[ScriptedCanBoard]:
+    """:class:`ScriptedCanBoard`, for tests to start with their channel and answer (and close)."""
+    return ScriptedCanBoard
 
 
 @pytest.fixture(name="wait_for")

@@ -1,11 +1,9 @@
 """NETCANOEM: identifiers and payloads, the CAN rate ceiling, the driver on a virtual bus."""
 
 import struct
-import threading
 import time
 import uuid
 
-import can
 import numpy as np
 import pytest
 
@@ -230,58 +228,27 @@ class FakeTime:
         self.now_s += seconds
 
 
-class TimedBoard:
-    """Answers gauge request k (gauge 0 = k) after ``round_trip_s(k)`` of fake time, on its own virtual bus.
+def timed_replies(fake_time: FakeTime, round_trip_s):
+    """The answer to gauge request k: gauge 0 = k, after ``round_trip_s(k)`` of fake time.
 
     The fake time advances before the replies go out, so the poller reads it only once the round trip is over:
     the send times the poller stamps depend on the script alone, not on thread timing.
     """
 
-    def __init__(self, channel: str, fake_time: FakeTime, round_trip_s) -> None:
-        self.bus = can.Bus(interface="virtual", channel=channel)
-        self.fake_time = fake_time
-        self.round_trip_s = round_trip_s
-        self.requests = 0
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-        self._thread.start()
+    def answer(k: int) -> list[tuple[int, bytes]]:
+        fake_time.now_s += round_trip_s(k)
+        first, second = protocol.encode_gauge_replies(0, np.array([k % 32768, 0, 0, 0, 0, 0]))
+        return [(protocol.OPCODE_READ_GAUGES, first), (protocol.OPCODE_GAUGES_SECOND_REPLY, second)]
 
-    def send(self, opcode: int, data: bytes) -> None:
-        self.bus.send(
-            can.Message(
-                arbitration_id=protocol.arbitration_id(protocol.DEFAULT_BASE_ID, opcode),
-                is_extended_id=False,
-                data=data,
-            )
-        )
-
-    def _run(self) -> None:
-        while not self._stop.is_set():
-            message = self.bus.recv(0.05)
-            if message is None:
-                continue
-            opcode = protocol.split_arbitration_id(message.arbitration_id)[1]
-            if opcode == protocol.OPCODE_SERIAL_NUMBER:
-                self.send(opcode, protocol.encode_serial_number("FT8884"))
-                continue
-            k = self.requests
-            self.requests += 1
-            self.fake_time.now_s += self.round_trip_s(k)
-            first, second = protocol.encode_gauge_replies(0, np.array([k % 32768, 0, 0, 0, 0, 0]))
-            self.send(protocol.OPCODE_READ_GAUGES, first)
-            self.send(protocol.OPCODE_GAUGES_SECOND_REPLY, second)
-
-    def close(self) -> None:
-        self._stop.set()
-        self._thread.join()
-        self.bus.shutdown()
+    return answer
 
 
-def poll_on_fake_clock(rate_hz: float, round_trip_s, samples: int):
-    """Poll a TimedBoard at ``rate_hz`` until ``samples`` arrived: (request numbers, send times s, driver)."""
+def poll_on_fake_clock(board_class, rate_hz: float, round_trip_s, samples: int):
+    """Poll a scripted board (``board_class``: the ``scripted_can_board`` fixture) answering with
+    :func:`timed_replies` at ``rate_hz`` until ``samples`` arrived: (request numbers, send times s, driver)."""
     fake_time = FakeTime()
     channel = f"ornitail-schedule-{uuid.uuid4().hex[:8]}"
-    board = TimedBoard(channel, fake_time, round_trip_s)
+    board = board_class(channel, timed_replies(fake_time, round_trip_s))
     driver = NetCanOemDriver(
         interface="virtual",
         channel=channel,
@@ -306,13 +273,13 @@ def poll_on_fake_clock(rate_hz: float, round_trip_s, samples: int):
     return numbers.tolist(), times, driver
 
 
-def test_poller_makes_up_a_stall_shorter_than_the_catch_up_limit():
+def test_poller_makes_up_a_stall_shorter_than_the_catch_up_limit(scripted_can_board):
     # 1000/s, round trips of 0.4 ms, request 10 stalls 5 ms: requests 11..18 are late and go back to back (one
     # outstanding, 0.4 ms apart) until request 19 is on time again; every sample k >= 19 is sent at k ms.
     def round_trip_s(k):
         return 5.4e-3 if k == 10 else 0.4e-3
 
-    numbers, times, driver = poll_on_fake_clock(1000.0, round_trip_s, 40)
+    numbers, times, driver = poll_on_fake_clock(scripted_can_board, 1000.0, round_trip_s, 40)
     assert numbers == list(range(40))
     expected_ms = list(range(11)) + [15.4 + 0.4 * i for i in range(8)] + list(range(19, 40))
     np.testing.assert_allclose(times, np.array(expected_ms) * 1e-3, rtol=0, atol=1e-9)
@@ -320,7 +287,9 @@ def test_poller_makes_up_a_stall_shorter_than_the_catch_up_limit():
     assert driver.missed_replies == driver.discarded_samples == 0
 
 
-def test_poller_holds_the_rate_on_average_through_runs_of_round_trips_longer_than_the_period():
+def test_poller_holds_the_rate_on_average_through_runs_of_round_trips_longer_than_the_period(
+    scripted_can_board,
+):
     # In every 8 requests, 3 round trips of 1.6 ms then 5 of 0.2 ms: 0.725 ms a request on average, under the
     # 1 ms period. The poller falls 3 x 0.6 ms behind and makes it up, so sample k is sent at k ms + at most
     # 1.8 ms, for ever. Waiting a period after each late request, as `max(previous + period, now)` did, loses
@@ -328,7 +297,7 @@ def test_poller_holds_the_rate_on_average_through_runs_of_round_trips_longer_tha
     def round_trip_s(k):
         return 1.6e-3 if k % 8 < 3 else 0.2e-3
 
-    numbers, times, driver = poll_on_fake_clock(1000.0, round_trip_s, 400)
+    numbers, times, driver = poll_on_fake_clock(scripted_can_board, 1000.0, round_trip_s, 400)
     assert numbers == list(range(400))
     lag_s = times - np.arange(400) * 1e-3
     assert lag_s.min() >= -1e-9
@@ -336,14 +305,14 @@ def test_poller_holds_the_rate_on_average_through_runs_of_round_trips_longer_tha
     assert driver.requests_skipped == 0
 
 
-def test_poller_resynchronises_after_a_stall_longer_than_the_catch_up_limit():
+def test_poller_resynchronises_after_a_stall_longer_than_the_catch_up_limit(scripted_can_board):
     # Request 10 stalls 100 ms, over the 50 ms limit: request 11 (due at 11 ms) goes out at 110.4 ms, the 99
     # requests due before then are counted as skipped, and the schedule restarts there, one request a period,
     # without a burst.
     def round_trip_s(k):
         return 100.4e-3 if k == 10 else 0.4e-3
 
-    numbers, times, driver = poll_on_fake_clock(1000.0, round_trip_s, 40)
+    numbers, times, driver = poll_on_fake_clock(scripted_can_board, 1000.0, round_trip_s, 40)
     assert numbers == list(range(40))
     expected_ms = list(range(11)) + [110.4 + i for i in range(29)]
     np.testing.assert_allclose(times, np.array(expected_ms) * 1e-3, rtol=0, atol=1e-9)

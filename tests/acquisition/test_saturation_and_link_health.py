@@ -3,10 +3,8 @@ protocol level, exact counts through the drivers on the simulated boards (no sle
 clock)."""
 
 import struct
-import threading
 import uuid
 
-import can
 import numpy as np
 import pytest
 
@@ -150,56 +148,27 @@ def test_thousand_garbage_bytes_on_the_pty_are_counted_exactly(simulated_daq, da
 SPOOF_GAUGES = np.full(6, 0x1234)
 
 
-class ScriptedBoard:
-    """A NETCANOEM board played by the test on its own virtual bus: it answers gauge request k with gauges
-    (k, 0, 0, 0, 0, 0) (status 0x0040 for k = 12, gauge 5 saturated for k = 13), and another node's frames
-    with the board's ids go out before the reply to request k (key k) or after it (key -k - 1)."""
+def scripted_replies(foreign_before: dict[int, list[tuple[int, bytes]]]):
+    """The answer to gauge request k: gauges (k, 0, 0, 0, 0, 0) (status 0x0040 for k = 12, gauge 5 saturated for
+    k = 13), and another node's frames with the board's ids before the reply (key k) or after it (key -k - 1)."""
 
-    def __init__(self, channel: str, foreign_before: dict[int, list[tuple[int, bytes]]]) -> None:
-        self.bus = can.Bus(interface="virtual", channel=channel)
-        self.foreign_before = foreign_before
-        self.requests = 0
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-        self._thread.start()
+    def answer(k: int) -> list[tuple[int, bytes]]:
+        status = 0x0040 if k == 12 else 0
+        gauges = np.array([k, 0, 0, 0, 0, 32767 if k == 13 else 0])
+        first, second = protocol.encode_gauge_replies(status, gauges)
+        return [
+            *foreign_before.get(k, []),
+            (protocol.OPCODE_READ_GAUGES, first),
+            (protocol.OPCODE_GAUGES_SECOND_REPLY, second),
+            *foreign_before.get(-k - 1, []),
+        ]
 
-    def send(self, opcode: int, data: bytes) -> None:
-        self.bus.send(
-            can.Message(
-                arbitration_id=protocol.arbitration_id(protocol.DEFAULT_BASE_ID, opcode),
-                is_extended_id=False,
-                data=data,
-            )
-        )
-
-    def _run(self) -> None:
-        while not self._stop.is_set():
-            message = self.bus.recv(0.05)
-            if message is None or message.dlc != 0:
-                continue
-            opcode = protocol.split_arbitration_id(message.arbitration_id)[1]
-            if opcode == protocol.OPCODE_SERIAL_NUMBER:
-                self.send(opcode, protocol.encode_serial_number("FT8884"))
-                continue
-            k = self.requests
-            self.requests += 1
-            for opcode, data in self.foreign_before.get(k, []):
-                self.send(opcode, data)
-            status = 0x0040 if k == 12 else 0
-            gauges = np.array([k, 0, 0, 0, 0, 32767 if k == 13 else 0])
-            first, second = protocol.encode_gauge_replies(status, gauges)
-            self.send(protocol.OPCODE_READ_GAUGES, first)
-            self.send(protocol.OPCODE_GAUGES_SECOND_REPLY, second)
-            for opcode, data in self.foreign_before.get(-k - 1, []):  # sent after the reply
-                self.send(opcode, data)
-
-    def close(self) -> None:
-        self._stop.set()
-        self._thread.join()
-        self.bus.shutdown()
+    return answer
 
 
-def test_foreign_frames_with_the_boards_ids_are_counted_and_never_taken_as_samples():
+def test_foreign_frames_with_the_boards_ids_are_counted_and_never_taken_as_samples(
+    scripted_can_board,
+):
     first, second = protocol.encode_gauge_replies(0, SPOOF_GAUGES)
     assert (first, second) == (bytes.fromhex("0000123412341234"), bytes.fromhex("123412341234"))
     foreign = {
@@ -209,7 +178,7 @@ def test_foreign_frames_with_the_boards_ids_are_counted_and_never_taken_as_sampl
         10: [(protocol.OPCODE_READ_GAUGES, b"")],  # another master's request
     }
     channel = f"ornitail-foreign-{uuid.uuid4().hex[:8]}"
-    board = ScriptedBoard(channel, foreign)
+    board = scripted_can_board(channel, scripted_replies(foreign))
     driver = NetCanOemDriver(interface="virtual", channel=channel, name="CAN balance")
     try:
         assert driver.open() == "FT8884"
