@@ -24,9 +24,16 @@ SHORT_PLAN = {
     "configuration": {"tail_id": "S3", "x_h_mm": 98},
     "steady_state": {"theta_deg": 25.0, "v_m_s": 0.8, "f_hz": 13.5},
     "sweeps": {"theta_deg": [3.0], "v_m_s": [0.2]},
-    "protocol": {"steady_state_repeats": 1, "record_s": 0.6, "tailless_points": "steady_state"},
+    "protocol": {
+        "steady_state_repeats": 1,
+        "record_s": 0.6,
+        "tailless_points": "steady_state",
+        "sample_rate_hz": 2000.0,
+    },
     "settle": {"stable_for_s": 0.3, "timeout_s": 60},
 }
+RECORD_ROWS = 1200
+"""Rows of one 0.6 s record at the plan's 2 kHz."""
 
 
 def motor_spins_down(rig, within_rig_s=5.0):
@@ -46,9 +53,9 @@ def short_plan(**protocol):
 
 @pytest.fixture
 def simulated_time_scale():
-    # Faster than the plugin default is not possible for the serial DAQ: at 10 kHz x 5 the pty carries
-    # 50 k frames/s, which two busy cores still sustain.
-    return 5.0
+    # At the plan's 2 kHz x 10 the pty carries 20 k frames/s, which two busy cores sustain (10 kHz x 5, 50 k
+    # frames/s, was the most they did).
+    return 10.0
 
 
 def test_sweep_records_every_point_in_two_runs_with_tares(simulated_rig, tmp_path):
@@ -68,15 +75,17 @@ def test_sweep_records_every_point_in_two_runs_with_tares(simulated_rig, tmp_pat
     assert journal_indices == list(range(7))
     frame = tailed.set_points_frame()
     rows = frame["last_sample_index"] - frame["first_sample_index"] + 1
-    assert (rows == 6000).all()  # 0.6 s at 10 kHz
+    assert (rows == RECORD_ROWS).all()
     # What processing needs from the rig travels with the run.
     assert tailed.metadata["rig"]["gear_ratio"] == 21.33
     # The stream never pauses: no counter gaps, nothing lost, on the simulated link.
     assert tailed.counter_gaps() == []
-    # The rig reached each set point: pitch and velocity read during the record (their means over ~6 readings,
-    # one per 0.1 s of rig time) within the settle tolerances.
+    # The rig reached each set point: pitch and velocity read during the record within the settle tolerances. The
+    # readings come one per 0.1 s of rig time plus the round trip of two serial queries, which at 10x real time
+    # costs a few hundredths of a second of rig time (a busy host: a tenth), so a 0.6 s record holds 3-6 of them:
+    # at least two make a mean.
     for _, row in frame.iterrows():
-        assert row["condition_readings"] >= 5
+        assert row["condition_readings"] >= 2
         assert abs(row["pitch_mean_rad"] - row["pitch_rad"]) <= math.radians(0.2)
         assert abs(row["tunnel_velocity_mean_m_s"] - row["tunnel_velocity_m_s"]) <= 0.02
     # The motor's starts and stops are journalled where they were read: it starts for each measurement after a
@@ -193,7 +202,7 @@ def test_unplugged_fan_fails_the_run_naming_it_and_keeps_what_was_recorded(simul
     recording = load_recording(result.run_directories[0])
     assert recording.status == "failed"
     assert len(recording.set_points_frame()) == 2
-    assert recording.sample_count >= 2 * 6000
+    assert recording.sample_count >= 2 * RECORD_ROWS
     # Motor was still brought to rest although the fan is gone.
     assert motor_spins_down(simulated_rig)
     with pytest.raises(InstrumentError):
@@ -204,13 +213,15 @@ def test_unplugged_fan_fails_the_run_naming_it_and_keeps_what_was_recorded(simul
 
 
 def drops_after_the_first_point_settles(rig, kind="tare"):
-    """An ``on_event`` that makes the board drop 25 samples every 0.1 s of rig time for 1.5 s once the first point
-    of ``kind`` settles, and an event set when the drops are over."""
+    """An ``on_event`` that makes the board drop 25 samples every 0.1 s of rig time for 1.5 s of rig time once the
+    first point of ``kind`` settles, and an event set when the drops are over. The end is read on the rig's clock,
+    so a thread slowed by a busy host drops less often but never for longer."""
     board = rig.simulators.daq_board
     dropping_over = threading.Event()
 
     def drop_for_a_while():
-        for _ in range(15):
+        end_s = rig.now_s() + 1.5
+        while rig.now_s() < end_s:
             board.drop_samples(25)
             rig.wait_simulated_s(0.1)
         dropping_over.set()
@@ -268,7 +279,7 @@ def test_unplugged_balance_fails_the_run_naming_it_and_keeps_what_was_recorded(
     recording = load_recording(result.run_directories[0])
     assert recording.status == "failed"
     assert len(recording.set_points_frame()) == 2
-    assert recording.sample_count >= 2 * 6000
+    assert recording.sample_count >= 2 * RECORD_ROWS
     assert motor_spins_down(simulated_rig)
     simulated_rig.close(
         raise_errors=False
@@ -284,7 +295,7 @@ def test_records_longer_than_the_remembered_blocks_are_checked_whole(
     result = run_sweep(short_plan(), simulated_rig, tmp_path)
     assert result.status == "completed"
     frame = load_recording(result.run_directories[0]).set_points_frame()
-    assert (frame["last_sample_index"] - frame["first_sample_index"] + 1 == 6000).all()
+    assert (frame["last_sample_index"] - frame["first_sample_index"] + 1 == RECORD_ROWS).all()
     assert (frame["samples_missing_in_record"] == 0).all()
 
 

@@ -8,6 +8,7 @@ os.environ.setdefault("PYQTGRAPH_QT_LIB", "PySide6")
 import math  # noqa: E402
 
 import pytest  # noqa: E402
+from backend_agreement import rig_copy  # noqa: E402
 
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE  # noqa: E402
 from ornitail.gui.main_window import MainWindow  # noqa: E402
@@ -16,6 +17,8 @@ from ornitail.gui.rig_session import RigSession  # noqa: E402
 TIME_SCALE = 3.0
 """Simulated seconds per wall second: the pty then carries 30 k frames/s beside a redrawing window; at 4x two
 busy cores lost samples inside sweep records now and then (which processing then rightly refuses)."""
+LIGHT_STREAM_TIME_SCALE = 6.0
+"""The same for a rig streaming at 2 kHz: 12 k frames/s on the pty."""
 
 
 @pytest.fixture
@@ -32,8 +35,24 @@ def window(qtbot, tmp_path):
 @pytest.fixture
 def connected(window, qtbot):
     """The window with the simulated rig connected through its Connect button and streaming."""
-    window.controls.time_scale.setValue(TIME_SCALE)
-    window.controls.rig_file.edit.setText(str(DEFAULT_RIG_FILE))
+    return _connect(window, qtbot, DEFAULT_RIG_FILE, TIME_SCALE)
+
+
+@pytest.fixture
+def connected_at_2_khz(window, qtbot, tmp_path_factory):
+    """As :func:`connected`, on a copy of the simulated rig whose balance streams at 2 kHz instead of 10 kHz, run
+    faster (:data:`LIGHT_STREAM_TIME_SCALE`): for tests that record whole sweeps."""
+    rig_file = rig_copy(
+        DEFAULT_RIG_FILE,
+        tmp_path_factory.mktemp("rig-2-khz"),
+        {"sample_rate_hz = 10000.0": "sample_rate_hz = 2000.0"},
+    )
+    return _connect(window, qtbot, rig_file, LIGHT_STREAM_TIME_SCALE)
+
+
+def _connect(window, qtbot, rig_file, time_scale):
+    window.controls.time_scale.setValue(time_scale)
+    window.controls.rig_file.edit.setText(str(rig_file))
     window.controls.connect_button.click()
     qtbot.waitUntil(lambda: window.data.rows_received > 1000, timeout=20_000)
     qtbot.waitUntil(lambda: math.isfinite(window.session.readings.time_s), timeout=5_000)

@@ -24,6 +24,7 @@ v_m_s = [-0.2, 0.2]
 steady_state_repeats = 1
 record_s = 0.6
 tailless_points = "steady_state"
+sample_rate_hz = 2000.0
 [settle]
 stable_for_s = 0.3
 timeout_s = 60
@@ -63,15 +64,16 @@ def _restart(window, qtbot, button):
         pytest.fail(f"the sweep did not start again; the window's log:\n{window.log.toPlainText()}")
 
 
-def test_abort_pause_resume_complete_and_process_a_sweep(connected, qtbot, tmp_path):
-    window = connected
+def test_abort_pause_resume_complete_and_process_a_sweep(connected_at_2_khz, qtbot, tmp_path):
+    window = connected_at_2_khz
     panel = window.sweep_panel
     _run_plan(window, qtbot, tmp_path, panel.run_button)
     qtbot.waitUntil(lambda: panel.progress.value() >= 2, timeout=60_000)
     assert panel.eta.text().startswith("ETA ") and "SWEEP RUNNING" in window.status.recording.text()
-    # The sweep records through the window's balance stream: the live view keeps moving while it runs.
+    # The sweep records through the window's balance stream: the live view keeps moving while it runs (200 rows: 1 s
+    # of rig time at the display's 200 Hz, a tenth of the 2 kHz stream).
     rows = window.data.rows_received
-    qtbot.waitUntil(lambda: window.data.rows_received > rows + 1000, timeout=10_000)
+    qtbot.waitUntil(lambda: window.data.rows_received > rows + 200, timeout=10_000)
     assert window.session.sweep_running
     panel.abort_button.click()  # now: the point in progress is dropped
     aborted = _wait_done(window, qtbot)
@@ -105,7 +107,7 @@ def test_abort_pause_resume_complete_and_process_a_sweep(connected, qtbot, tmp_p
     assert len(measurements) == len(set(measurements))
     # The live view still streams after the sweep.
     rows = window.data.rows_received
-    qtbot.waitUntil(lambda: window.data.rows_received > rows + 1000, timeout=10_000)
+    qtbot.waitUntil(lambda: window.data.rows_received > rows + 200, timeout=10_000)
     runs_tab = window.runs_tab
     qtbot.waitUntil(lambda: runs_tab.table.rowCount() == len(result.run_directories), timeout=5_000)
     runs_tab.table.selectAll()
