@@ -123,7 +123,9 @@ def check_rig(rig_path: str | Path) -> RigCheck:
     checks: list[InstrumentCheck] = []
     try:
         simulator = _start_simulation(rig)
-        if simulator is not None:  # served by another process: its control socket is checked too
+        if (
+            simulator is not None
+        ):  # reached through a link of its own (a server's control socket): checked too
             checks.append(simulator)
         checks += _check_instruments(rig)
     finally:
@@ -141,28 +143,29 @@ def check_rig(rig_path: str | Path) -> RigCheck:
 
 
 def _start_simulation(rig: Rig) -> InstrumentCheck | None:
-    """Start the rig's simulators in this process, or reach their server: the check of the server's control socket
-    (None for a rig not served by another process)."""
-    control = rig.description.simulator_control
+    """Reach the rig's simulated instruments (nothing for real ones): the check of the link they were reached
+    through, when their backend names one (a simulator server's control socket), else None."""
     try:
         rig.start_simulation()
     except InstrumentError as error:
+        _, key = rig.description.simulation
         return InstrumentCheck(
             error.instrument_name,
-            "[rig].simulator_control",
-            str(control),
+            key,
+            rig.description.simulation_setting,
             STATUS_FAILED,
             problem=error.problem,
         )
-    if control is None:
+    link = rig.simulators.link() if rig.simulators is not None else None
+    if link is None:
         return None
     return InstrumentCheck(
-        "rig simulator",
-        "[rig].simulator_control",
-        str(control),
+        link.name,
+        link.rig_file_key,
+        link.route,
         STATUS_OK,
-        identity="ornitail rig simulator server",
-        reading={"time_scale": float(rig.recording_description()["time_scale"])},
+        identity=link.identity,
+        reading=link.reading,
     )
 
 

@@ -144,6 +144,11 @@ class RigDescription:
         return None
 
     @property
+    def simulation_setting(self) -> str:
+        """The value of the field that chooses the simulation, as text: the control socket's path, or ``true``."""
+        return "true" if self.simulated else str(self.simulator_control)
+
+    @property
     def carries_flap_channels(self) -> bool:
         """True when the balance stream holds the Hall line, hot-wire and thermocouple (what a sweep records):
         the ORNI-DAQ9 balance, or a CAN or Net F/T balance with ``[balance.aux_daq]``."""

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import time
 from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
 
 from ornitail.acquisition.actuator_backends import entry_point_class
 from ornitail.acquisition.rig_file import RigDescription
@@ -21,6 +22,23 @@ from ornitail.calibration.tunnel_table import TunnelVelocityTable
 
 SIMULATION_ROLE = "rig"
 """The entry points of simulations are named ``rig.<name>``."""
+
+
+@dataclass(frozen=True)
+class SimulationLink:
+    """A link the rig reaches its simulated instruments through, checked by ``ornitail rig check`` in a row of its
+    own (the control socket of a simulator served by another process)."""
+
+    name: str
+    """Instrument name of the row."""
+    rig_file_key: str
+    """Where the rig file sets the link (``[rig].simulator_control``)."""
+    route: str
+    """Where it is connected: a socket path."""
+    identity: str
+    """What answered."""
+    reading: dict[str, float] = field(default_factory=dict)
+    """What it reported, keyed with units where they have one."""
 
 
 class RigSimulation(ABC):
@@ -66,6 +84,10 @@ class RigSimulation(ABC):
 
     def netft_address(self) -> tuple[str, int, int] | None:
         """Host, RDT port and HTTP port that replace ``[balance.netft]``'s, or None to keep them."""
+        return None
+
+    def link(self) -> SimulationLink | None:
+        """The link these instruments were reached through, once :meth:`start` answered (None: in this process)."""
         return None
 
     @abstractmethod

@@ -49,7 +49,7 @@ from typing import Any
 
 from ornitail.acquisition.instrument_errors import InstrumentDisconnected
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, RigDescription, read_rig_file
-from ornitail.acquisition.rig_simulation import RigSimulation
+from ornitail.acquisition.rig_simulation import RigSimulation, SimulationLink
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.calibration.hotwire_laws import HotwireLaw
 from ornitail.calibration.tunnel_table import TunnelVelocityTable
@@ -416,6 +416,16 @@ class ServedRigInstruments(RigSimulation):
     def time_scale(self) -> float:
         """The server's time scale."""
         return self._time_scale
+
+    def link(self) -> SimulationLink:
+        """The server's control socket, which answered :meth:`start` with its time scale."""
+        return SimulationLink(
+            "rig simulator",
+            "[rig].simulator_control",
+            str(self.control.path),
+            "ornitail rig simulator server",
+            {"time_scale": self._time_scale},
+        )
 
     def mount_vehicle(self, tail_id: str, x_h_m: float) -> None:
         """Ask the server to mount the vehicle with tail ``tail_id`` at ``x_h_m`` (m)."""

@@ -166,6 +166,25 @@ def test_rig_check_finds_the_absent_port_among_present_ones_and_leaves_those_saf
     assert not after["daq"]["streaming"]
 
 
+def test_a_simulator_server_that_is_gone_is_one_failed_row_naming_its_control_socket(
+    server, tmp_path
+):
+    """The served rig's file with its control socket moved to a path nobody serves: the simulation's link is
+    checked in a row of its own, which fails naming the rig file's field and the socket, exit 3."""
+    absent = tmp_path / "absent-control.sock"
+    text = server.rig_file.read_text()
+    served = f'simulator_control = "{server.control.path}"'
+    assert served in text
+    rig = tmp_path / "rig.toml"
+    rig.write_text(text.replace(served, f'simulator_control = "{absent}"'))
+    completed = run_ornitail("rig", "check", str(rig), "--json")
+    assert completed.returncode == 3, completed.stdout + completed.stderr
+    checks = {check["instrument"]: check for check in json.loads(completed.stdout)["instruments"]}
+    link = checks["rig simulator"]
+    assert link["status"] == "failed" and link["rig_file_key"] == "[rig].simulator_control"
+    assert link["route"] == str(absent) and str(absent) in link["problem"]
+
+
 def test_rig_check_refuses_swapped_ports_without_commanding_the_wrong_instrument(server, tmp_path):
     text = server.rig_file.read_text()
     fan, motor = server.ports["fan"], server.ports["motor"]
