@@ -20,15 +20,20 @@ SHORT_PLAN = {
     "configuration": {"tail_id": "S3", "x_h_mm": 98},
     "steady_state": {"theta_deg": 25.0, "v_m_s": 0.8, "f_hz": 13.5},
     "sweeps": {"theta_deg": [3.0], "v_m_s": [0.2], "f_hz": [1.0]},
-    "protocol": {"steady_state_repeats": 1, "record_s": 0.6, "tailless_points": "steady_state"},
+    "protocol": {
+        "steady_state_repeats": 1,
+        "record_s": 0.6,
+        "tailless_points": "steady_state",
+        "sample_rate_hz": 2000.0,
+    },
     "settle": {"stable_for_s": 0.3, "timeout_s": 60},
 }
 
 
 @pytest.fixture
 def simulated_time_scale():
-    # As in tests/acquisition/test_sweep.py: 10 kHz x 5 is what the serial DAQ's pty sustains on two cores.
-    return 5.0
+    # As in tests/acquisition/test_sweep.py: the plan's 2 kHz x 10, 20 k frames/s on the pty.
+    return 10.0
 
 
 @pytest.fixture
