@@ -1,12 +1,12 @@
 """Keeping a run's catalog row up to date from a thread of its own, so a locked catalog never stalls a recording.
 
-The recorder offers a snapshot of the run's metadata (``run.json``'s content) at start, after each set point and
-at stop; :class:`CatalogUpdater` writes the newest one to the catalog in its own thread, with a short SQLite busy
-timeout and retries. Older snapshots are superseded, never queued. Another process holding the catalog's write
-lock (``BEGIN EXCLUSIVE``, a long transaction) delays only the catalog row: the HDF5 writer never touches SQLite.
-When the recording stops, the updater tries for at most ``final_wait_s`` more and then gives up; the run
-directory is the truth and :meth:`RunCatalog.reconcile` (``ornitail runs``, the next ``--resume``) brings the
-row up to date later.
+The run's catalog subscriber (:mod:`ornitail.acquisition.catalog_subscriber`) offers a snapshot of the run's
+metadata (``run.json``'s content) at its start, set point and stop documents; :class:`CatalogUpdater` writes the
+newest one to the catalog in its own thread, with a short SQLite busy timeout and retries. Older snapshots are
+superseded, never queued. Another process holding the catalog's write lock (``BEGIN EXCLUSIVE``, a long
+transaction) delays only the catalog row: neither the HDF5 writer nor the recording thread touches SQLite. When
+the run stops, the updater tries for at most ``final_wait_s`` more and then gives up; the run directory is the
+truth and :meth:`RunCatalog.reconcile` (``ornitail runs``, the next ``--resume``) brings the row up to date later.
 """
 
 from __future__ import annotations

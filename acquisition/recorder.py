@@ -7,13 +7,13 @@ slow the writer. Completed set points go through the same queue (so they are jou
 their samples are flushed and ``samples.h5`` is fsynced), into the HDF5 set-point table and an fsynced
 journal line. Rows a driver flags (saturated, over the sensor's rated load) are counted per set point.
 
-The writer thread waits on nothing but the disk: the catalog row is kept up to date by a
-:class:`~ornitail.acquisition.catalog_sync.CatalogUpdater` thread, and a catalog locked by another
-process only delays that row (``ornitail runs`` reconciles it from the run directory later).
+The writer thread waits on nothing but the disk. The recorder does not know the catalog: whoever runs the
+run subscribes a :class:`~ornitail.acquisition.catalog_subscriber.CatalogSubscriber` to the run's documents
+(:func:`ornitail.acquisition.run_engine.open_run`), which carry :meth:`Recorder.metadata_snapshot`.
 
 Use it as a context manager: ``__exit__`` always writes the stop record (``completed``,
-``incomplete``, ``aborted`` or ``failed`` with the exception text) to ``run.json`` and offers it to the
-catalog. File layout: ``docs/recordings.md``.
+``incomplete``, ``aborted`` or ``failed`` with the exception text) to ``run.json``. File layout:
+``docs/recordings.md``.
 """
 
 from __future__ import annotations
@@ -47,7 +47,6 @@ from ornitail.acquisition.calibration_copies import (
     write_calibration_copies,
 )
 from ornitail.acquisition.catalog import utc_now_iso
-from ornitail.acquisition.catalog_sync import CatalogUpdater
 from ornitail.acquisition.counter_gaps import find_counter_gaps
 from ornitail.acquisition.recording_layout import (
     EXIT_STATUS_ABORTED,
@@ -82,7 +81,6 @@ from ornitail.core.input_files import read_input_bytes
 TARGET_CHUNK_BYTES = 256 * 1024
 WRITER_STOP_TIMEOUT_S = 60.0
 SET_POINT_QUEUE_TIMEOUT_S = 10.0
-MAX_CATALOG_ERRORS_KEPT = 20
 WRITE_INTERVAL_S = 0.1
 """The writer gathers about this much data (s) before each write and flush; a crash loses at most this much
 more than what the queue holds."""
@@ -215,9 +213,6 @@ class Recorder:
         If given, :attr:`display_feed` receives every n-th row.
     display_capacity_blocks : int
         Blocks the display feed keeps (drop-oldest).
-    register_in_catalog : bool
-        Register the run in ``<data_root>/catalog.sqlite`` at start, per set point and at stop (from a
-        thread of its own; a locked catalog never delays the recording).
     """
 
     def __init__(
@@ -232,7 +227,6 @@ class Recorder:
         queue_capacity_blocks: int = 64,
         display_decimation: int | None = None,
         display_capacity_blocks: int = 64,
-        register_in_catalog: bool = True,
     ) -> None:
         configuration.validate()
         stream.validate()
@@ -269,11 +263,6 @@ class Recorder:
         self.display_feed = (
             DisplayFeed(display_decimation, display_capacity_blocks) if display_decimation else None
         )
-        self._register_in_catalog = register_in_catalog
-        self._catalog_updater: CatalogUpdater | None = None
-        self.catalog_synced: bool | None = None
-        """After the run: True if its stop record reached the catalog, False if the catalog stayed locked (the
-        next reconcile brings the row up to date), None without a catalog."""
         self.exit_status: str | None = None
         """After the run: its exit status as written in the stop record (None while it runs)."""
         self.exit_reason: str | None = None
@@ -312,7 +301,6 @@ class Recorder:
         self._gap_missing_samples = 0
         self._gap_positions: list[dict[str, Any]] = []
         self._set_points: list[SetPointRecord] = []
-        self._catalog_errors: list[str] = []
 
     # ----- driver side -------------------------------------------------------------------------
 
@@ -337,14 +325,16 @@ class Recorder:
         written (link, driver or recorder-queue losses alike; ``run.json``'s ``counter_gaps.missing_samples``)."""
         return self._gap_missing_samples
 
-    def wait_for_catalog(self, timeout_s: float) -> bool:
-        """Block until the catalog row holds the newest metadata (or ``timeout_s`` passed); return which.
+    @property
+    def rig_description(self) -> dict[str, Any]:
+        """The rig's description as ``run.json`` holds it (a copy)."""
+        return copy.deepcopy(self._rig_description)
 
-        Recording never needs this: it is for callers that read the catalog right after a change (tests).
-        """
-        if self._catalog_updater is None:
-            return False
-        return self._catalog_updater.wait_up_to_date(timeout_s)
+    def metadata_snapshot(self) -> dict[str, Any]:
+        """A copy of the run's metadata as it stands (``run.json``'s content, with the counts of the set points
+        journalled so far): the stop record once the run has ended."""
+        with self._metadata_lock:
+            return copy.deepcopy(self._current_metadata)
 
     def put_block(
         self, counters: np.ndarray, samples: np.ndarray, flags: np.ndarray | None = None
@@ -513,12 +503,7 @@ class Recorder:
         try:
             write_calibration_copies(self.run_directory, self._calibration_copies)
             self._write_metadata(EXIT_STATUS_RUNNING, None, None)
-            if self._register_in_catalog:
-                self._catalog_updater = CatalogUpdater(
-                    self.data_root, self.run_id, on_error=self._note_catalog_error
-                )
             self._create_samples_file()
-            self._update_catalog()
             self._writer_thread = threading.Thread(
                 target=self._writer_loop, name=f"recorder-{self.run_id}", daemon=True
             )
@@ -549,11 +534,7 @@ class Recorder:
         self._finish(status, reason)
 
     def _finish(self, status: str, reason: str | None) -> None:
-        """Stop the writer, close the file, write the stop record; the record is always written.
-
-        The catalog gets the stop record from its updater thread, which is given a few seconds; a catalog
-        locked for longer is brought up to date by the next reconcile (the run directory is the truth).
-        """
+        """Stop the writer, close the file, write the stop record; the record is always written."""
         self._accepting_blocks = False
         try:
             self._stop_writer()
@@ -567,13 +548,8 @@ class Recorder:
             self.exit_status, self.exit_reason = status, reason
             try:
                 self._write_metadata(status, reason, utc_now_iso())
-                self._update_catalog()
             finally:
-                try:
-                    if self._catalog_updater is not None:
-                        self.catalog_synced = self._catalog_updater.close()
-                finally:
-                    self._run_lock.release()
+                self._run_lock.release()
 
     def _stop_writer(self) -> None:
         thread = self._writer_thread
@@ -672,7 +648,6 @@ class Recorder:
                 "dropped_blocks": self.display_feed.dropped_blocks,
             },
             "writer_cpu_s": self._writer_cpu_s,
-            "catalog_errors": list(self._catalog_errors),
         }
 
     def _write_metadata(self, status: str, reason: str | None, stop_time: str | None) -> None:
@@ -681,19 +656,6 @@ class Recorder:
             write_json_atomically(
                 self.run_directory / RUN_METADATA_FILE_NAME, self._current_metadata
             )
-
-    def _update_catalog(self) -> None:
-        """Offer the current metadata to the catalog updater (never waits for SQLite)."""
-        if self._catalog_updater is None:
-            return
-        with self._metadata_lock:
-            snapshot = copy.deepcopy(self._current_metadata)
-        self._catalog_updater.offer(snapshot)
-
-    def _note_catalog_error(self, text: str) -> None:
-        """Keep the first catalog failures for ``run.json`` (called from the updater's thread)."""
-        if len(self._catalog_errors) < MAX_CATALOG_ERRORS_KEPT:
-            self._catalog_errors.append(text)
 
     # ----- writer thread -----------------------------------------------------------------------
 
@@ -830,7 +792,6 @@ class Recorder:
                     "report_count": self._link_report_count,
                 }
             )
-        self._update_catalog()
 
 
 def _fsync_path(path: Path) -> None:

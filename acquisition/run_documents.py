@@ -1,6 +1,7 @@
 """The documents a recording run emits, in the style of bluesky, and the dispatcher that hands them out.
 
-Every run a sweep records (through :func:`documented_run`) emits, in this order:
+Every run recorded through :func:`documented_run` (a sweep's, a manual run of the window; both open it with
+:func:`ornitail.acquisition.run_engine.open_run`) emits, in this order:
 
 - one :class:`RunStart` (name ``"start"``) once its recording directory is open,
 - one :class:`SetPointDocument` (name ``"set_point"``) per set point journalled in it,
@@ -8,7 +9,9 @@ Every run a sweep records (through :func:`documented_run`) emits, in this order:
 
 A subscriber is any callable taking ``(name, document)``. It is called in the recording thread, so it must be
 quick and must not block; one that raises is logged and counted by the :class:`DocumentDispatcher`, and the run
-goes on. Keys carry their units (``_rad``, ``_m_s``, ``_hz``, ``_s``).
+goes on. Keys carry their units (``_rad``, ``_m_s``, ``_hz``, ``_s``). Each document also carries
+``run_metadata``, a copy of the run's ``run.json`` content as it stood (the stop record in the stop document),
+from which the catalog subscriber writes the run's row.
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ import logging
 import threading
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from typing import Any, Literal
 
 from ornitail.acquisition.catalog import utc_now_iso
@@ -47,6 +50,10 @@ class RunStart:
         Set points this run is to record.
     time_utc : str
         ISO 8601 start time.
+    run_metadata : mapping
+        ``run.json`` as written at start.
+    progress : PlanProgress or None
+        Where the run's plan stands as the run begins (None: a run without a plan).
     """
 
     run_id: str
@@ -56,6 +63,26 @@ class RunStart:
     rig: Mapping[str, Any]
     set_points_planned: int
     time_utc: str
+    run_metadata: Mapping[str, Any] = field(default_factory=dict)
+    progress: PlanProgress | None = None
+
+
+@dataclass(frozen=True)
+class PlanProgress:
+    """Where the plan a run belongs to stands once a set point is recorded.
+
+    Attributes
+    ----------
+    done, total : int
+        Set points of the plan recorded whole so far (those of earlier runs of a resumed sweep's chain included)
+        and in the plan.
+    eta_s : float
+        Estimated rig time left, s.
+    """
+
+    done: int
+    total: int
+    eta_s: float
 
 
 @dataclass(frozen=True)
@@ -84,6 +111,12 @@ class SetPointDocument:
         Rows flagged saturated or over the rated load (None: the balance does not flag rows).
     time_utc : str
         ISO 8601 time it was handed to the journal.
+    run_metadata : mapping
+        The run's metadata as it stood (it may not count this set point yet: the writer journals it a moment
+        later).
+    progress : PlanProgress or None
+        The plan's progress with this set point counted (None: a run without a plan, e.g. the window's manual
+        run).
     """
 
     run_id: str
@@ -100,10 +133,18 @@ class SetPointDocument:
     saturated_samples: int | None
     over_range_samples: int | None
     time_utc: str
+    run_metadata: Mapping[str, Any] = field(default_factory=dict)
+    progress: PlanProgress | None = None
 
     @classmethod
     def of_record(
-        cls, run_id: str, sequence: int, record: SetPointRecord, time_utc: str
+        cls,
+        run_id: str,
+        sequence: int,
+        record: SetPointRecord,
+        time_utc: str,
+        run_metadata: Mapping[str, Any],
+        progress: PlanProgress | None = None,
     ) -> SetPointDocument:
         """The document of ``record``, the run's ``sequence``-th set point."""
         return cls(
@@ -121,6 +162,8 @@ class SetPointDocument:
             saturated_samples=record.saturated_samples,
             over_range_samples=record.over_range_samples,
             time_utc=time_utc,
+            run_metadata=run_metadata,
+            progress=progress,
         )
 
 
@@ -140,6 +183,8 @@ class RunStop:
         Set point documents emitted for this run.
     time_utc : str
         ISO 8601 stop time.
+    run_metadata : mapping
+        The stop record as written to ``run.json``.
     """
 
     run_id: str
@@ -147,6 +192,7 @@ class RunStop:
     reason: str | None
     set_points_recorded: int
     time_utc: str
+    run_metadata: Mapping[str, Any] = field(default_factory=dict)
 
 
 Document = RunStart | SetPointDocument | RunStop
@@ -197,18 +243,24 @@ class DocumentDispatcher:
 class RunDocuments:
     """The documents of one open run: numbers its set point documents and sends each through ``dispatcher``."""
 
-    def __init__(self, dispatcher: DocumentDispatcher, run_id: str) -> None:
+    def __init__(self, dispatcher: DocumentDispatcher, recorder: Recorder) -> None:
         self.dispatcher = dispatcher
-        self.run_id = run_id
+        self.recorder = recorder
+        self.run_id = recorder.run_id
         self.set_points_recorded = 0
 
-    def set_point(self, record: SetPointRecord) -> None:
-        """Emit the document of ``record``, just journalled in this run."""
+    def set_point(self, record: SetPointRecord, progress: PlanProgress | None = None) -> None:
+        """Emit the document of ``record``, just handed to this run's journal, with its plan's ``progress``."""
         self.set_points_recorded += 1
         self.dispatcher.emit(
             "set_point",
             SetPointDocument.of_record(
-                self.run_id, self.set_points_recorded, record, utc_now_iso()
+                self.run_id,
+                self.set_points_recorded,
+                record,
+                utc_now_iso(),
+                self.recorder.metadata_snapshot(),
+                progress,
             ),
         )
 
@@ -218,29 +270,32 @@ def documented_run(
     recorder: Recorder,
     dispatcher: DocumentDispatcher,
     *,
-    plan_name: str,
-    rig_description: Mapping[str, Any],
     set_points_planned: int,
+    progress: PlanProgress | None = None,
 ) -> Iterator[RunDocuments]:
     """Open ``recorder``'s run for the block, emitting its start document once it is open and its stop document
     (with the exit status of the stop record) after it closed, however the block ends.
 
-    A recorder that fails to open emits nothing: there is no run.
+    The plan name and the rig's description are the recorder's; ``progress`` is where the plan stands as the run
+    begins (None: a run without a plan). A recorder that fails to open emits nothing:
+    there is no run.
     """
     documents: RunDocuments | None = None
     try:
         with recorder:
-            documents = RunDocuments(dispatcher, recorder.run_id)
+            documents = RunDocuments(dispatcher, recorder)
             dispatcher.emit(
                 "start",
                 RunStart(
                     run_id=recorder.run_id,
                     run_directory=str(recorder.run_directory),
-                    plan_name=plan_name,
+                    plan_name=recorder.configuration.plan_name,
                     configuration=asdict(recorder.configuration),
-                    rig=dict(rig_description),
+                    rig=recorder.rig_description,
                     set_points_planned=set_points_planned,
                     time_utc=utc_now_iso(),
+                    run_metadata=recorder.metadata_snapshot(),
+                    progress=progress,
                 ),
             )
             yield documents
@@ -254,5 +309,6 @@ def documented_run(
                     reason=recorder.exit_reason,
                     set_points_recorded=documents.set_points_recorded,
                     time_utc=utc_now_iso(),
+                    run_metadata=recorder.metadata_snapshot(),
                 ),
             )

@@ -22,8 +22,10 @@ again. A record with saturated or over-range samples is kept, with a warning (pr
 
 Whatever happens, motor and fan are brought to a safe state and every completed set point stays on disk.
 
-Every run emits its start, set point and stop documents (:mod:`ornitail.acquisition.run_documents`) to the
-subscribers of the ``documents`` dispatcher given to :func:`run_sweep`; the stop document whatever ends the run.
+Every run is opened by :func:`~ornitail.acquisition.run_engine.open_run`: it emits its start, set point and stop
+documents (:mod:`ornitail.acquisition.run_documents`) to the subscribers of the ``documents`` dispatcher given to
+:func:`run_sweep` (the stop document whatever ends the run), and the catalog subscriber keeps its row. Each set
+point document carries the sweep's progress (set points of the chain done, in the plan, time left).
 """
 
 from __future__ import annotations
@@ -52,13 +54,10 @@ from ornitail.acquisition.recording_layout import (
     SetPointRecord,
 )
 from ornitail.acquisition.rig import Rig
-from ornitail.acquisition.run_documents import DocumentDispatcher, documented_run
+from ornitail.acquisition.run_documents import DocumentDispatcher, PlanProgress
+from ornitail.acquisition.run_engine import open_run
 from ornitail.acquisition.run_files import read_journal, run_is_live
-from ornitail.acquisition.set_point_recording import (
-    MAX_RETAKES,
-    POLL_INTERVAL_S,
-    record_set_point,
-)
+from ornitail.acquisition.set_point_recording import MAX_RETAKES, POLL_INTERVAL_S
 from ornitail.acquisition.sweep_plan import (
     SetPoint,
     SweepPlan,
@@ -376,6 +375,21 @@ class _SweepContext:
         )
         return typical_s * len(remaining)
 
+    def count(self, point: SetPoint, started_s: float, record: SetPointRecord) -> PlanProgress:
+        """Count ``point``'s ``record`` (moved to from rig time ``started_s``, s) into the sweep: done unless it
+        is still lossy or was done in an earlier run of the chain; where the sweep stands then."""
+        if record.samples_missing_in_record:
+            self.lossy_points[point.index] = (
+                f"set point {point.label} lost {record.samples_missing_in_record} samples "
+                f"inside its record after {MAX_RETAKES} retakes"
+            )
+        else:
+            self.lossy_points.pop(point.index, None)
+            if point.index not in self.recorded_before:
+                self.completed += 1
+        self.durations_s.append(self.rig.now_s() - started_s)
+        return PlanProgress(self.completed, len(self.plan.set_points), self.eta_s())
+
     def emit(self, stage: str, point: SetPoint | None, message: str = "") -> None:
         self.on_event(
             SweepEvent(
@@ -469,22 +483,20 @@ def _run_tail_state(
         plan_name=plan.name,
         resumed_from_run_id=previous_run_id,
     )
-    rig_description = rig.recording_description()
     recorder = Recorder(
         data_root,
         configuration,
         layout,
-        rig_description=rig_description,
+        rig_description=rig.recording_description(),
         calibration_files=rig.calibration_files(),
         display_decimation=None,
     )
-    with documented_run(
+    with open_run(
         recorder,
         context.documents,
-        plan_name=plan.name,
-        rig_description=rig_description,
         set_points_planned=len(points),
-    ) as documents:
+        progress=PlanProgress(context.completed, len(plan.set_points), context.eta_s()),
+    ) as run:
         run_directories.append(recorder.run_directory)
         stream = context.stream
         if not stream.running or stream.sample_rate_hz != plan.sample_rate_hz:
@@ -504,20 +516,13 @@ def _run_tail_state(
                 )
                 settle_s = _settle(context, point)
                 context.emit("settled", point)
-                record = record_set_point(
-                    context, recorder, point, context.plan.sample_rate_hz, settle_s
+                record = run.record(
+                    context,
+                    point,
+                    context.plan.sample_rate_hz,
+                    settle_s,
+                    progress=functools.partial(context.count, point, started_s),
                 )
-                documents.set_point(record)
-                if record.samples_missing_in_record:
-                    context.lossy_points[point.index] = (
-                        f"set point {point.label} lost {record.samples_missing_in_record} samples "
-                        f"inside its record after {MAX_RETAKES} retakes"
-                    )
-                else:
-                    context.lossy_points.pop(point.index, None)
-                    if point.index not in context.recorded_before:
-                        context.completed += 1
-                context.durations_s.append(rig.now_s() - started_s)
                 context.emit("recorded", point)
                 _warn_about_record(context, point, record)
             lossy = [
@@ -587,7 +592,8 @@ def run_sweep(
         streaming. Without one the sweep streams the balance itself and stops it at the end.
     documents : DocumentDispatcher, optional
         Receives the start, set point and stop documents of every run the sweep records
-        (:mod:`ornitail.acquisition.run_documents`); the stop document whatever ends the run.
+        (:mod:`ornitail.acquisition.run_documents`); the stop document whatever ends the run. Set point documents
+        carry the sweep's progress (:class:`~ornitail.acquisition.run_documents.PlanProgress`).
 
     Raises
     ------

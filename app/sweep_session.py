@@ -30,11 +30,19 @@ from typing import Any
 import click
 
 from ornitail.acquisition.catalog import RunCatalog
+from ornitail.acquisition.catalog_subscriber import CatalogSubscriber
 from ornitail.acquisition.instrument_errors import InstrumentError, InstrumentInUse
 from ornitail.acquisition.live_balance import LiveBalance
 from ornitail.acquisition.recorder import Recorder
 from ornitail.acquisition.recording_reader import load_recording
 from ornitail.acquisition.rig import Rig
+from ornitail.acquisition.run_documents import (
+    Document,
+    DocumentDispatcher,
+    DocumentName,
+    RunStart,
+    SetPointDocument,
+)
 from ornitail.acquisition.sweep import (
     SweepChainBusy,
     SweepEvent,
@@ -80,9 +88,11 @@ class SweepInterrupted(KeyboardInterrupt):
 
 
 def _protected_code() -> frozenset[CodeType]:
-    """Code during which an end-now signal is held back: writing a stop record, making the rig safe."""
+    """Code during which an end-now signal is held back: writing a stop record and the catalog's last wait for
+    it, making the rig safe."""
     names = (
         (Recorder, ("__enter__", "__exit__", "_finish")),
+        (CatalogSubscriber, ("close_run",)),
         (Rig, ("close", "safe_state")),
         (LiveBalance, ("detach", "stop")),
     )
@@ -210,6 +220,26 @@ def _operator_prompt(instruction: str) -> None:
     click.pause(f"ornitail: {instruction} Press any key when done.", err=True)
 
 
+class ProgressFromDocuments:
+    """A subscriber of the sweep's run documents that moves ``progress`` at each run's start and set point
+    document: the set points of the chain done and the time left, as the document's
+    :class:`~ornitail.acquisition.run_documents.PlanProgress` says them."""
+
+    def __init__(self, progress: Progress) -> None:
+        self.progress = progress
+
+    def __call__(self, name: DocumentName, document: Document) -> None:
+        """Update the progress from a start or set point document that carries the plan's progress."""
+        if isinstance(document, RunStart) and document.progress is not None:
+            self.progress.update(document.progress.done, document.progress.eta_s)
+        elif isinstance(document, SetPointDocument) and document.progress is not None:
+            self.progress.update(
+                document.progress.done,
+                document.progress.eta_s,
+                f"#{document.plan_point_index} recorded",
+            )
+
+
 def run_sweep_with_progress(
     plan_path: Path,
     rig_path: Path,
@@ -267,11 +297,13 @@ def _connect_and_sweep(
     try:
         rig.connect()
         with Progress(f"sweep {plan.name}", len(plan.set_points), "set points") as progress:
+            documents = DocumentDispatcher()
+            documents.subscribe(ProgressFromDocuments(progress))
 
             def on_event(event: SweepEvent) -> None:
-                label = event.set_point.label if event.set_point else ""
-                if event.stage in ("moving", "recorded"):
-                    progress.update(event.completed, event.eta_s, label)
+                if event.stage == "moving":  # the point under way, beside the count of those done
+                    label = event.set_point.label if event.set_point else ""
+                    progress.update(progress.done, event.eta_s, label)
                 elif event.stage == "tail_change":
                     progress.stage("tail change")
                 elif event.stage == "warning":
@@ -285,6 +317,7 @@ def _connect_and_sweep(
                 stop=signals.stop,
                 on_event=on_event,
                 operator_prompt=_operator_prompt,
+                documents=documents,
             )
     except SweepInterrupted as raised:
         interrupt = raised

@@ -14,6 +14,7 @@ import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
+from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -31,7 +32,8 @@ from ornitail.acquisition.recording_layout import (
     RunConfiguration,
 )
 from ornitail.acquisition.rig import Rig
-from ornitail.acquisition.set_point_recording import record_set_point
+from ornitail.acquisition.run_documents import DocumentDispatcher
+from ornitail.acquisition.run_engine import OpenRun, open_run
 from ornitail.acquisition.sweep import SweepEvent, SweepResult
 from ornitail.acquisition.sweep_plan import SetPoint, SettleCriteria, load_plan
 from ornitail.calibration.ati_calibration import AtiCalibration
@@ -62,20 +64,28 @@ class SessionMessage:
 
 @dataclass
 class ManualRecording:
-    """The manual run being recorded: its recorder, the rig and balance stream it records from, its tares.
+    """The manual run being recorded: the run :func:`~ornitail.acquisition.run_engine.open_run` opened (and the
+    stack that closes it), the rig and balance stream it records from, its tares.
 
     It is the :class:`~ornitail.acquisition.set_point_recording.RecordingContext` of the window's records: tares
     and points become rows of the run exactly as a sweep's do (by the board's sample counter, retaken when samples
-    were lost, with the conditions read during the record and the motor's starts and stops).
+    were lost, with the conditions read during the record and the motor's starts and stops), each recorded with
+    :meth:`OpenRun.record`, so the run emits its start, set point and stop documents as a sweep's runs do.
     """
 
-    recorder: Recorder
+    run: OpenRun
+    closing: ExitStack
     rig: Rig
     stream: LiveBalance
     tailed: bool
     motor_log: MotorRunningLog = field(default_factory=MotorRunningLog)
     points: int = 0
     tare_pitches_rad: list[float] = field(default_factory=list)
+
+    @property
+    def recorder(self) -> Recorder:
+        """The run's recorder."""
+        return self.run.recorder
 
     def wait_rig_s(self, seconds: float) -> None:
         """Wait ``seconds`` of rig time; raise if the balance stream failed."""
@@ -100,11 +110,18 @@ class RigSession:
         Where runs and the catalog are written (default: ``ornitail``'s data root).
     display_decimation : int
         Every n-th balance row goes to the display.
+
+    Attributes
+    ----------
+    documents : DocumentDispatcher
+        Receives the start, set point and stop documents of every run recorded from the window (manual runs
+        and sweeps), in the recording's thread.
     """
 
     def __init__(self, data_root: Path | None = None, display_decimation: int = 10) -> None:
         self.data_root = Path(data_root) if data_root is not None else default_data_root()
         self.display_decimation = display_decimation
+        self.documents = DocumentDispatcher()
         self.messages: queue.Queue[SessionMessage] = queue.Queue()
         self.rig: Rig | None = None
         self.live: LiveBalance | None = None
@@ -390,11 +407,16 @@ class RigSession:
             rig_description=rig.recording_description(),
             calibration_files=rig.calibration_files(),
         )
-        recorder.__enter__()
-        recording = ManualRecording(recorder, rig, self.live, tailed)
-        recording.motor_log.running = rig.read_flapping_frequency_hz() > 0.0
-        self.live.attach(recorder)
-        recording.motor_log.start_run()
+        closing = ExitStack()
+        run = closing.enter_context(open_run(recorder, self.documents, set_points_planned=0))
+        # A run that cannot start recording is closed at once, as failed:
+        with ExitStack() as on_failure:
+            on_failure.push(closing)
+            recording = ManualRecording(run, closing, rig, self.live, tailed)
+            recording.motor_log.running = rig.read_flapping_frequency_hz() > 0.0
+            self.live.attach(recorder)
+            recording.motor_log.start_run()
+            on_failure.pop_all()
         self.recording = recording
         self.post(
             "info",
@@ -454,7 +476,7 @@ class RigSession:
             repeat=0,
             record_s=record_s,
         )
-        record = record_set_point(recording, recording.recorder, point, self.live.sample_rate_hz)
+        record = recording.run.record(recording, point, self.live.sample_rate_hz)
         recording.points += 1
         rows = record.last_sample_index - record.first_sample_index + 1
         lost = (
@@ -473,11 +495,12 @@ class RigSession:
         if recording is None:
             return
         try:
-            if self.live is not None:
-                self.live.detach()
-            if abort_reason is not None:
-                recording.recorder.mark_aborted(abort_reason)
-            recording.recorder.__exit__(None, None, None)
+            # The run's stop record and stop document are written whatever is raised in this block:
+            with recording.closing:
+                if self.live is not None:
+                    self.live.detach()
+                if abort_reason is not None:
+                    recording.recorder.mark_aborted(abort_reason)
         finally:  # only once the stop record is written: the window reads this as "run closed"
             self.recording = None
         status = "aborted" if abort_reason else "completed"
@@ -503,6 +526,7 @@ class RigSession:
             self.data_root,
             resume=resume,
             balance_stream=self.live,
+            documents=self.documents,
             on_event=lambda event: self.post("sweep_event", _event_text(event), event),
             on_done=self._sweep_done,
             operator_prompt=self._operator_prompt,

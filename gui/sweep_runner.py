@@ -14,6 +14,7 @@ from pathlib import Path
 
 from ornitail.acquisition.live_balance import LiveBalance
 from ornitail.acquisition.rig import Rig
+from ornitail.acquisition.run_documents import DocumentDispatcher
 from ornitail.acquisition.sweep import (
     SweepEvent,
     SweepResult,
@@ -26,7 +27,8 @@ from ornitail.acquisition.sweep_plan import SweepPlan
 class SweepRunner(threading.Thread):
     """One sweep of ``plan`` on ``rig`` into ``data_root``, in its own thread.
 
-    ``balance_stream`` is the window's live stream (the sweep records through it, so the display goes on).
+    ``balance_stream`` is the window's live stream (the sweep records through it, so the display goes on);
+    ``documents`` receives the documents of every run the sweep records.
     ``on_event`` gets every :class:`SweepEvent`, ``on_done`` the :class:`SweepResult` (or the exception that
     ended the sweep), both called in this thread; ``operator_prompt`` must block until the person has acted.
     """
@@ -39,6 +41,7 @@ class SweepRunner(threading.Thread):
         *,
         resume: bool,
         balance_stream: LiveBalance | None,
+        documents: DocumentDispatcher,
         on_event: Callable[[SweepEvent], None],
         on_done: Callable[[SweepResult | BaseException], None],
         operator_prompt: Callable[[str], None],
@@ -46,6 +49,7 @@ class SweepRunner(threading.Thread):
         super().__init__(name="sweep", daemon=True)
         self.plan, self.rig, self.data_root, self.resume = plan, rig, data_root, resume
         self.balance_stream = balance_stream
+        self.documents = documents
         self.stop_request = SweepStop()
         self._on_event, self._on_done, self._operator_prompt = on_event, on_done, operator_prompt
 
@@ -61,6 +65,7 @@ class SweepRunner(threading.Thread):
                 on_event=self._on_event,
                 operator_prompt=self._operator_prompt,
                 balance_stream=self.balance_stream,
+                documents=self.documents,
             )
         except BaseException as error:  # handed to the window as a message
             outcome = error

@@ -1978,12 +1978,16 @@ def _record_run(data_root: Path) -> Path:
         SetPointRecord,
         StreamLayout,
     )
+    from ornitail.acquisition.run_documents import DocumentDispatcher
+    from ornitail.acquisition.run_engine import open_run
 
     layout = StreamLayout(
         [ChannelSpec(f"gauge_{i}", "V") for i in range(6)], sample_rate_hz=10_000.0
     )
     recorder = Recorder(data_root, RunConfiguration("S3", 0.098, True, "corpus"), layout)
-    with recorder:
+    with open_run(
+        recorder, DocumentDispatcher(), set_points_planned=2
+    ):  # registered, as sweeps register
         for block in range(2):
             counters = np.arange(block * 500, (block + 1) * 500)
             recorder.put_block(counters, np.zeros((500, 6)))

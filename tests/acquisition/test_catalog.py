@@ -27,6 +27,8 @@ from ornitail.acquisition.recording_layout import (
     SetPointRecord,
     StreamLayout,
 )
+from ornitail.acquisition.run_documents import DocumentDispatcher
+from ornitail.acquisition.run_engine import open_run
 from ornitail.app.cli import main
 from ornitail.core.errors import UserInputError
 
@@ -44,10 +46,11 @@ RUN_CONFIGURATIONS = [
 
 
 def record_run(data_root: Path, tail_id, x_h_m, tailed, ending: str, sample_blocks: int = 2):
-    """Record a short real run that ends as ``ending``; return its recorder."""
+    """Record a short real run that ends as ``ending``, registered by its catalog subscriber; return its
+    recorder."""
     recorder = Recorder(data_root, RunConfiguration(tail_id, x_h_m, tailed, "steady"), LAYOUT)
     try:
-        with recorder:
+        with open_run(recorder, DocumentDispatcher(), set_points_planned=1):
             for block_index in range(sample_blocks):
                 counters = np.arange(block_index * 500, (block_index + 1) * 500)
                 recorder.put_block(counters, np.zeros((500, 6)))
@@ -91,8 +94,8 @@ def test_run_is_registered_at_start_updated_per_set_point_and_at_stop(tmp_path):
         LAYOUT,
         calibration_files={"nano17": CALIBRATION_FILE},
     )
-    with recorder:
-        assert recorder.wait_for_catalog(timeout_s=30)  # the row is written from its own thread
+    with open_run(recorder, DocumentDispatcher(), set_points_planned=1) as run:
+        assert run.catalog.wait_up_to_date(timeout_s=30)  # the row is written from its own thread
         at_start = RunCatalog(tmp_path).get_run(recorder.run_id)
         assert (at_start.exit_status, at_start.sample_count, at_start.set_point_count) == (
             "running",

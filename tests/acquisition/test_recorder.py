@@ -26,6 +26,8 @@ from ornitail.acquisition.recording_layout import (
     StreamLayout,
 )
 from ornitail.acquisition.recording_reader import load_recording
+from ornitail.acquisition.run_documents import DocumentDispatcher
+from ornitail.acquisition.run_engine import open_run
 from ornitail.core.errors import UserInputError
 
 CALIBRATION_FILE = Path(__file__).parents[1] / "data" / "calibration" / "FT8884.cal"
@@ -171,7 +173,10 @@ def test_exit_status_is_always_written_to_run_json_and_catalog(
         "exception": ValueError("strut actuator jammed"),
     }
     expected_exception = type(endings[ending]) if ending in endings else None
-    with pytest.raises(expected_exception) if expected_exception else nullcontext(), recorder:
+    with (
+        pytest.raises(expected_exception) if expected_exception else nullcontext(),
+        open_run(recorder, DocumentDispatcher(), set_points_planned=0),
+    ):
         counters = np.arange(1000)
         recorder.put_block(counters, synthetic_samples(counters, 9))
         if ending == "mark_aborted":

@@ -23,11 +23,14 @@ RECORDING_SCRIPT = textwrap.dedent(
     from ornitail.acquisition.recorder import Recorder
     from ornitail.acquisition.recording_layout import (
         ChannelSpec, RunConfiguration, SetPointRecord, StreamLayout)
+    from ornitail.acquisition.run_documents import DocumentDispatcher
+    from ornitail.acquisition.run_engine import open_run
 
     data_root = sys.argv[1]
     layout = StreamLayout([ChannelSpec(f"channel_{i}", "V") for i in range(9)], 10_000.0)
     configuration = RunConfiguration("S3", 0.098, True, plan_name="crash_test")
-    with Recorder(data_root, configuration, layout) as recorder:
+    recorder = Recorder(data_root, configuration, layout)
+    with open_run(recorder, DocumentDispatcher(), set_points_planned=0):  # as sweeps open their runs
         print(recorder.run_id, flush=True)
         start = time.monotonic()
         block_index = 0

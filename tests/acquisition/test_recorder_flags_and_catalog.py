@@ -8,6 +8,7 @@ import math
 import os
 import sqlite3
 import threading
+from contextlib import AbstractContextManager
 from pathlib import Path
 
 import h5py
@@ -31,6 +32,8 @@ from ornitail.acquisition.recording_layout import (
     StreamLayout,
 )
 from ornitail.acquisition.recording_reader import load_recording
+from ornitail.acquisition.run_documents import DocumentDispatcher
+from ornitail.acquisition.run_engine import OpenRun, open_run
 from ornitail.acquisition.run_files import read_journal
 from ornitail.app.cli import main
 
@@ -42,6 +45,13 @@ def point(
     plan_point_index: int, first: int, last: int, kind: str = "measurement"
 ) -> SetPointRecord:
     return SetPointRecord(plan_point_index, kind, first, last, math.radians(20.0), 0.8, 13.5, True)
+
+
+def catalogued_run(data_root: Path) -> AbstractContextManager[OpenRun]:
+    """A run of ``CONFIGURATION`` with its catalog subscriber, opened as sweeps and the window open theirs."""
+    return open_run(
+        Recorder(data_root, CONFIGURATION, LAYOUT), DocumentDispatcher(), set_points_planned=0
+    )
 
 
 def put_rows(recorder: Recorder, first: int, count: int, flags: np.ndarray | None = None) -> None:
@@ -66,7 +76,8 @@ def test_flagged_rows_merge_across_blocks_and_are_counted_in_any_range():
 
 
 def test_flagged_rows_are_counted_per_set_point_in_journal_hdf5_run_json_and_catalog(tmp_path):
-    with Recorder(tmp_path, CONFIGURATION, LAYOUT) as recorder:
+    with catalogued_run(tmp_path) as run:
+        recorder = run.recorder
         flags = np.zeros(1000, dtype=np.uint8)
         flags[100:350] |= ROW_FLAG_SATURATED  # rows 100..349, across the block boundary at 300
         flags[300:400] |= ROW_FLAG_OVER_RATED_RANGE
@@ -76,7 +87,7 @@ def test_flagged_rows_are_counted_per_set_point_in_journal_hdf5_run_json_and_cat
         recorder.complete_set_point(point(0, 0, 199, "tare"))
         recorder.complete_set_point(point(1, 200, 499))
         recorder.complete_set_point(point(2, 500, 1499))
-        assert recorder.wait_for_catalog(timeout_s=30)
+        assert run.catalog.wait_up_to_date(timeout_s=30)
     journal = read_journal(recorder.run_directory)
     counts = [(record.saturated_samples, record.over_range_samples) for record in journal]
     assert counts == [(100, 0), (150, 100), (0, 0)]
@@ -142,7 +153,7 @@ def test_samples_file_is_fsynced_before_each_journal_line_that_points_into_it(
         real_fsync(descriptor)
 
     monkeypatch.setattr(os, "fsync", recording_fsync)
-    with Recorder(tmp_path, CONFIGURATION, LAYOUT, register_in_catalog=False) as recorder:
+    with Recorder(tmp_path, CONFIGURATION, LAYOUT) as recorder:
         put_rows(recorder, 0, 2000)
         recorder.complete_set_point(point(0, 0, 999))
         put_rows(recorder, 2000, 1000)
@@ -153,7 +164,8 @@ def test_samples_file_is_fsynced_before_each_journal_line_that_points_into_it(
 
 
 def test_a_run_marked_incomplete_ends_incomplete_with_the_reason(tmp_path):
-    with Recorder(tmp_path, CONFIGURATION, LAYOUT) as recorder:
+    with catalogued_run(tmp_path) as run:
+        recorder = run.recorder
         put_rows(recorder, 0, 100)
         recorder.complete_set_point(point(4, 0, 99))
         recorder.mark_incomplete("set point #4 lost 30 samples inside its record after 3 retakes")
@@ -189,7 +201,8 @@ def test_a_locked_catalog_never_reaches_the_writer_and_is_reconciled_after_relea
         return real_upsert(self, entry, busy_timeout_s)
 
     monkeypatch.setattr(RunCatalog, "upsert_run", watched_upsert)
-    with Recorder(tmp_path, CONFIGURATION, LAYOUT) as recorder:  # held at start: no traceback
+    with catalogued_run(tmp_path) as run:  # held at start: no traceback
+        recorder = run.recorder
         for index in range(5):
             put_rows(recorder, index * 1000, 1000)
             recorder.complete_set_point(point(index, index * 1000, index * 1000 + 999))
@@ -198,7 +211,9 @@ def test_a_locked_catalog_never_reaches_the_writer_and_is_reconciled_after_relea
     assert len(recording.set_points) == 5 and recording.sample_count == 5000
     assert recording.metadata["queue_overflow"]["lost_samples"] == 0
     assert writing_threads and set(writing_threads) == {f"catalog-{recorder.run_id}"}
-    assert recorder.catalog_synced is False  # the row waits for the next reconcile
+    assert run.catalog.synced is False  # the row waits for the next reconcile
+    assert all("locked" in error for error in recording.metadata["catalog_errors"])
+    assert recording.metadata["catalog_errors"]
 
     # Still locked: `ornitail runs` lists the run as its directory says, with a note; exit code 0.
     listed = CliRunner().invoke(main, ["runs", "--data-root", str(tmp_path), "--json"])
@@ -221,8 +236,9 @@ def test_a_locked_catalog_never_reaches_the_writer_and_is_reconciled_after_relea
 
 def test_a_stale_catalog_row_is_rewritten_from_run_json(tmp_path, monkeypatch):
     """A row left at "running" (the stop record never reached the catalog) is brought up to date."""
-    with Recorder(tmp_path, CONFIGURATION, LAYOUT) as recorder:
-        assert recorder.wait_for_catalog(timeout_s=30)
+    with catalogued_run(tmp_path) as run:
+        recorder = run.recorder
+        assert run.catalog.wait_up_to_date(timeout_s=30)
         stale = RunCatalog(tmp_path).get_run(recorder.run_id)
         put_rows(recorder, 0, 100)
         recorder.complete_set_point(point(0, 0, 99))

@@ -1,10 +1,21 @@
-"""Run documents: the dispatcher, a recorder's run framed by start and stop, and the documents of sweeps on the
-simulated rig (completed, aborted, failed), with a subscriber that raises on every document."""
+"""Run documents: the dispatcher, a recorder's run framed by start and stop, a run the engine opens (documents
+and catalog row), and the documents of sweeps on the simulated rig (completed, aborted, failed), with a subscriber
+that raises on every document."""
 
+import json
+
+import numpy as np
 import pytest
 
+from ornitail.acquisition.catalog import RunCatalog
 from ornitail.acquisition.recorder import Recorder
-from ornitail.acquisition.recording_layout import ChannelSpec, RunConfiguration, StreamLayout
+from ornitail.acquisition.recording_layout import (
+    RUN_METADATA_FILE_NAME,
+    ChannelSpec,
+    RunConfiguration,
+    SetPointRecord,
+    StreamLayout,
+)
 from ornitail.acquisition.recording_reader import load_recording
 from ornitail.acquisition.run_documents import (
     DocumentDispatcher,
@@ -13,6 +24,7 @@ from ornitail.acquisition.run_documents import (
     SetPointDocument,
     documented_run,
 )
+from ornitail.acquisition.run_engine import open_run
 from ornitail.acquisition.sweep import SweepStop, run_sweep
 from ornitail.acquisition.sweep_plan import plan_from_document
 
@@ -108,19 +120,51 @@ def test_a_run_that_raises_still_emits_its_stop_document(tmp_path, error, status
         tmp_path,
         RunConfiguration(tail_id="S3", x_h_m=0.098, tailed=True, plan_name="manual"),
         StreamLayout([ChannelSpec("gauge_0", "V")], sample_rate_hz=1000.0),
-        register_in_catalog=False,
     )
-    with (
-        pytest.raises(type(error)),
-        documented_run(
-            recorder, dispatcher, plan_name="manual", rig_description={}, set_points_planned=1
-        ),
-    ):
+    with pytest.raises(type(error)), documented_run(recorder, dispatcher, set_points_planned=1):
         raise error
     assert [name for name, _ in received] == ["start", "stop"]
     stop = received[-1][1]
     assert stop.exit_status == status == load_recording(recorder.run_directory).status
     assert stop.set_points_recorded == 0
+
+
+def test_a_run_the_engine_opens_carries_its_metadata_and_keeps_its_catalog_row_when_it_fails(
+    tmp_path,
+):
+    dispatcher, received = collecting_dispatcher()
+    recorder = Recorder(
+        tmp_path,
+        RunConfiguration(tail_id="S3", x_h_m=0.098, tailed=True, plan_name="manual"),
+        StreamLayout([ChannelSpec("gauge_0", "V")], sample_rate_hz=1000.0),
+        rig_description={"balance": "simulated"},
+    )
+    with (
+        pytest.raises(RuntimeError),
+        open_run(recorder, dispatcher, set_points_planned=2) as run,
+    ):
+        recorder.put_block(np.arange(100), np.zeros((100, 1)))
+        record = SetPointRecord(0, "tare", 0, 99, 0.26, 0.0, 0.0, True)
+        recorder.complete_set_point(record)
+        run.documents.set_point(record)
+        raise RuntimeError("disk on fire")
+    start, set_point, stop = (document for _, document in received)
+    assert (start.plan_name, start.rig, start.set_points_planned) == (
+        "manual",
+        {"balance": "simulated"},
+        2,
+    )
+    assert start.run_metadata["exit_status"] == "running"
+    assert (set_point.kind, stop.exit_status, stop.reason) == (
+        "tare",
+        "failed",
+        "RuntimeError: disk on fire",
+    )
+    run_json = json.loads((recorder.run_directory / RUN_METADATA_FILE_NAME).read_text())
+    assert stop.run_metadata == run_json and run_json["set_point_count"] == 1
+    assert run.catalog.synced is True and run.catalog.errors == []
+    entry = RunCatalog(tmp_path).get_run(recorder.run_id)
+    assert (entry.exit_status, entry.set_point_count) == ("failed", 1)
 
 
 def test_a_completed_sweep_emits_start_set_points_and_stop_per_run_despite_a_raising_subscriber(
@@ -142,6 +186,15 @@ def test_a_completed_sweep_emits_start_set_points_and_stop_per_run_despite_a_rai
     assert tailed.set_points_planned + tailless.set_points_planned == len(plan.set_points)
     assert sum(len(documents) - 2 for documents in runs) == len(plan.set_points)
     assert dispatcher.subscriber_failures == len(received)
+    # Each start and set point document says where the sweep stands: points of the chain done, time left.
+    assert (tailed.progress.done, tailless.progress.done) == (0, tailed.set_points_planned)
+    set_points = [document for name, document in received if name == "set_point"]
+    assert [document.progress.done for document in set_points] == list(
+        range(1, len(plan.set_points) + 1)
+    )
+    assert {document.progress.total for document in set_points} == {len(plan.set_points)}
+    assert all(document.progress.eta_s > 0 for document in set_points[:-1])
+    assert set_points[-1].progress.eta_s == 0.0
 
 
 def test_an_aborted_sweep_ends_its_run_with_an_aborted_stop_document(simulated_rig, tmp_path):

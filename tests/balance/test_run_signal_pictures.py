@@ -51,7 +51,6 @@ def recorded_run(tmp_path_factory) -> tuple[Path, Path]:
         configuration,
         layout,
         calibration_files={"balance": CALIBRATION_FILE},
-        register_in_catalog=False,
     ) as recorder:
         for block in range(6):  # 1 s of tare, then 2 s flapping
             counters = np.arange(block * 1000, (block + 1) * 1000)

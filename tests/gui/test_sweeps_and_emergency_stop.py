@@ -150,12 +150,28 @@ def test_emergency_stop_mid_sweep_stops_motor_and_tunnel(connected, qtbot, tmp_p
     assert window.session.rig.fan.read_target_rpm() == 0.0
 
 
-def test_emergency_stop_without_a_sweep_stops_a_flapping_vehicle(connected, qtbot, drive_to):
+def test_emergency_stop_without_a_sweep_stops_a_flapping_vehicle_and_aborts_the_manual_run(
+    connected, qtbot, drive_to, tmp_path
+):
     window = connected
+    documents = []
+    window.session.documents.subscribe(lambda name, document: documents.append((name, document)))
+    window.controls.start_button.click()
+    qtbot.waitUntil(lambda: window.session.recording is not None, timeout=10_000)
     drive_to(window, 20.0, 1.0, 12.0)
     window.emergency_button.click()
     qtbot.waitUntil(lambda: _motor_and_fan_at_rest(window), timeout=20_000)
     assert math.isfinite(window.session.readings.pitch_rad)
+    qtbot.waitUntil(lambda: window.session.recording is None, timeout=10_000)
+    assert [name for name, _ in documents] == ["start", "stop"]
+    stop = documents[-1][1]
+    assert (stop.exit_status, stop.reason, stop.set_points_recorded) == (
+        "aborted",
+        "emergency stop",
+        0,
+    )
+    (run,) = RunCatalog(tmp_path).find_runs()
+    assert (run.run_id, run.exit_status) == (stop.run_id, "aborted")
 
 
 def test_design_tab_draws_a_proposed_tail_with_poles_and_damping(window, qtbot):

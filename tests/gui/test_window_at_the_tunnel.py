@@ -29,6 +29,8 @@ def test_tare_record_and_cycle_view_make_a_processable_manual_run(
     connected, qtbot, tmp_path, drive_to
 ):
     window = connected
+    documents = []
+    window.session.documents.subscribe(lambda name, document: documents.append((name, document)))
     controls = window.controls
     controls.pitch.setValue(25.0)
     controls.set_buttons["pitch"].click()
@@ -81,6 +83,18 @@ def test_tare_record_and_cycle_view_make_a_processable_manual_run(
     assert list(frame["last_sample_index"] - frame["first_sample_index"] + 1) == [5000, 6000]
     assert abs(math.degrees(frame["pitch_rad"].iloc[0]) - 25.0) < 0.2
     assert abs(frame["tunnel_velocity_m_s"].iloc[1] - 0.8) < 0.02
+    # The manual run is a documented run like a sweep's: start, a set point per record kept (the refused ones
+    # emit nothing), stop.
+    assert [name for name, _ in documents] == ["start", "set_point", "set_point", "stop"]
+    start, tare, point, stop = (document for _, document in documents)
+    assert (start.run_id, start.plan_name, start.set_points_planned) == (run.run_id, "manual", 0)
+    assert [tare.kind, point.kind] == ["tare", "measurement"]
+    assert [tare.sequence, point.sequence] == [1, 2]
+    assert start.progress is tare.progress is point.progress is None  # no plan: no plan's progress
+    assert point.first_sample_index == frame["first_sample_index"].iloc[1]
+    assert abs(point.tunnel_velocity_m_s - 0.8) < 1e-9
+    assert (stop.exit_status, stop.reason, stop.set_points_recorded) == ("completed", None, 2)
+    assert stop.run_metadata["set_point_count"] == 2
     # The runs tab lists it.
     qtbot.waitUntil(lambda: window.runs_tab.table.rowCount() == 1, timeout=5_000)
     assert window.runs_tab.table.item(0, 1).text() == "completed"
