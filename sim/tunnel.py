@@ -139,6 +139,34 @@ def resonance_gains(
     return 1.0 / (1.0 - ratio**2 + 2j * resonance.damping_ratio * ratio)
 
 
+def check_operating_point(
+    *,
+    pitch_rad: float | None = None,
+    tunnel_velocity_m_s: float | None = None,
+    flapping_frequency_hz: float | None = None,
+    tail_attached: bool | None = None,
+) -> None:
+    """Refuse a pitch (rad) outside +-pi/2, a tunnel velocity outside 0-20 m/s or a flapping frequency outside
+    0-30 Hz (None: not changed).
+
+    Raises
+    ------
+    UserInputError
+        Naming the value and its range.
+    """
+    checks = {
+        "pitch_rad": (pitch_rad, -math.pi / 2, math.pi / 2),
+        "tunnel_velocity_m_s": (tunnel_velocity_m_s, 0.0, 20.0),
+        "flapping_frequency_hz": (flapping_frequency_hz, 0.0, 30.0),
+    }
+    for name, (value, low, high) in checks.items():
+        if value is None:
+            continue
+        require_finite(name, value)
+        if not low <= value <= high:
+            raise UserInputError(name, f"value {value!r} is outside {low:g}..{high:g}")
+
+
 class TunnelSignalSource:
     """Streams the raw tunnel signals of a clamped DelFly block by block.
 
@@ -204,17 +232,11 @@ class TunnelSignalSource:
         """Change any of pitch (rad), tunnel velocity (m/s), flapping frequency (Hz, 0 = motor off),
         tail.
         """
-        checks = {
-            "pitch_rad": (pitch_rad, -math.pi / 2, math.pi / 2),
-            "tunnel_velocity_m_s": (tunnel_velocity_m_s, 0.0, 20.0),
-            "flapping_frequency_hz": (flapping_frequency_hz, 0.0, 30.0),
-        }
-        for name, (value, low, high) in checks.items():
-            if value is None:
-                continue
-            require_finite(name, value)
-            if not low <= value <= high:
-                raise UserInputError(name, f"value {value!r} is outside {low:g}..{high:g}")
+        check_operating_point(
+            pitch_rad=pitch_rad,
+            tunnel_velocity_m_s=tunnel_velocity_m_s,
+            flapping_frequency_hz=flapping_frequency_hz,
+        )
         if pitch_rad is not None:
             self.pitch_rad = float(pitch_rad)
         if tunnel_velocity_m_s is not None:

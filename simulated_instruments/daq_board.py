@@ -232,8 +232,11 @@ class SimulatedDaqBoard(SimulatedDevice):
 
     def _sample_signals(self, count: int) -> np.ndarray:
         """The next ``count`` samples of the nine signals, V (the stream's samples ``_samples_due_before - count``
-        onwards)."""
-        return self.signals.next_block_at_rate(count, self.sample_rate_hz)
+        onwards, taken at their rig times: a block generated late still holds the state of its own time)."""
+        first = self._samples_due_before - count
+        return self.signals.next_block_at_rate(
+            count, self.sample_rate_hz, self._stream_start_s + first / self.sample_rate_hz
+        )
 
     def _set_rate(self, text: str) -> None:
         try:

@@ -86,7 +86,7 @@ class SimulatedRigInstruments(RigSimulation):
         """Start every simulator of ``description`` (a unique virtual CAN channel per rig)."""
         clock = SimulatedClock(description.time_scale)
         signals = SharedTunnelSignals.from_simulator(
-            seed=description.seed, sample_rate_hz=SIMULATION_SAMPLE_RATE_HZ
+            seed=description.seed, sample_rate_hz=SIMULATION_SAMPLE_RATE_HZ, clock=clock.now_s
         )
         started: list = []
         try:
