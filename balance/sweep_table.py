@@ -382,7 +382,9 @@ def measured_set_points(
     for point in points:
         run_id = point.recording.run_id
         if run_id not in clocks:
-            clocks[run_id] = running_clock_of(point.recording.set_points)
+            clocks[run_id] = running_clock_of(
+                point.recording.set_points, point.recording.counter_gaps()
+            )
     recorded_tares = {
         position: _recorded_tare(point, clocks[point.recording.run_id])
         for position, point in enumerate(points)

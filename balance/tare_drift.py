@@ -7,19 +7,20 @@ the tare before and the tare after it:
 
     V0(t) = (1 - lambda) V_before + lambda V_after,   lambda = (t - t_before) / (t_after - t_before)
 
-in the rig's running time t: the time the motor ran, counted on the run's sample counter (one continuous stream
-per run). The sweep journals when the motor started and stopped (``motor_transitions``: its speed read every 0.1
-s of rig time while settling and recording; a motor told to stop keeps turning for seconds, and counting from
-the stop command left every bracketing tare a few seconds of warm-up later than the clock said, ~0.3 mN in X on
-the simulated rig). Runs recorded without it count from the end of each tare record to the end of the last
-measurement record before the next tare. The balance warms and creeps while the rig runs, not while it stands
-for a tare: counted in wall time, the wind-off and the tare's record (a tenth of a block, and more of a short
-one) would take a share of the drift that
-happened while the motor ran. The two tares' errors are independent, so the covariance of V0 is
-``(1 - lambda)^2 C_before + lambda^2 C_after``; points that share a tare share its error in proportion to
-their weights on it (``balance.point_covariance``). Without a tare after the point in the
-same run, the last tare before it is used as it is ("constant since the last tare": its drift since then is not
-corrected).
+in the rig's running time t: the time the motor ran, counted on the run's sample counter (one continuous stream per
+run; records and the motor's changes are journalled as rows of the recording, and the samples lost between rows, the
+counter's gaps, are added back, so a lossy link does not stop the clock: with a fifth of the samples lost on a
+loaded host, counting rows put tares tens of seconds of warm-up early). The sweep journals when the motor started
+and stopped (``motor_transitions``: its speed read every 0.1 s of rig time while settling and recording; a motor
+told to stop keeps turning for seconds, and counting from the stop command left every bracketing tare a few seconds
+of warm-up later than the clock said, ~0.3 mN in X on the simulated rig). Runs recorded without it count from the
+end of each tare record to the end of the last measurement record before the next tare. The balance warms and creeps
+while the rig runs, not while it stands for a tare: counted in wall time, the wind-off and the tare's record (a
+tenth of a block, and more of a short one) would take a share of the drift that happened while the motor ran. The
+two tares' errors are independent, so the covariance of V0 is ``(1 - lambda)^2 C_before + lambda^2 C_after``; points
+that share a tare share its error in proportion to their weights on it (``balance.point_covariance``). Without a
+tare after the point in the same run, the last tare before it is used as it is ("constant since the last tare": its
+drift since then is not corrected).
 
 Straight drift is checked, not assumed (:class:`DriftCheck`): three successive tares at one pitch test it. A
 balance warming up bends its zero over a minute; when the check rejects straight drift, each point with a third
@@ -36,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import chi2
 
+from ornitail.acquisition.counter_gaps import CounterGap
 from ornitail.acquisition.motor_running_log import MOTOR_TRANSITIONS_KEY
 from ornitail.acquisition.recording_layout import SetPointRecord
 
@@ -48,15 +50,38 @@ DRIFT_CHECK_SIGNIFICANCE = 0.01
 """Chance of a false alarm of the drift check: straight drift is rejected below this p-value."""
 
 
+class SampleClockPositions:
+    """Where rows of a recording sit on its sample counter: a row plus the samples lost before it (the counter's
+    gaps), in samples from the run's first row."""
+
+    def __init__(self, gaps: Sequence[CounterGap] = ()) -> None:
+        jumps = sorted(
+            (gap.row_index, gap.missing_samples) for gap in gaps if gap.missing_samples > 0
+        )
+        self._rows = np.array([row for row, _ in jumps], dtype=float)
+        self._lost_before = np.cumsum([missing for _, missing in jumps], dtype=float)
+
+    def __call__(self, row: float) -> float:
+        """Position of row ``row`` (may be fractional: the middle of a record) on the sample counter, samples."""
+        gaps_before = int(np.searchsorted(self._rows, row, side="right"))
+        return float(row) + (float(self._lost_before[gaps_before - 1]) if gaps_before else 0.0)
+
+
 class RunningClock:
     """The rig's running time (motor on) of one run, in samples of its counter, from its records in order.
 
-    ``records`` are ``(is_tare, first_sample_index, last_sample_index)`` of every set point of the run. The motor
-    runs from the end of a tare record (or the run's start) to the end of the last measurement record before the
-    next tare (or the run's last record).
+    ``records`` are ``(is_tare, first_sample_index, last_sample_index)`` of every set point of the run (rows of the
+    recording; ``positions`` puts them on the sample counter, default: no sample lost). The motor runs from the end
+    of a tare record (or the run's start) to the end of the last measurement record before the next tare (or the
+    run's last record).
     """
 
-    def __init__(self, records: list[tuple[bool, float, float]]) -> None:
+    def __init__(
+        self,
+        records: list[tuple[bool, float, float]],
+        positions: SampleClockPositions | None = None,
+    ) -> None:
+        self.positions = positions or SampleClockPositions()
         ordered = sorted(records, key=lambda record: record[1])
         intervals: list[tuple[float, float]] = []
         start = 0.0
@@ -65,34 +90,38 @@ class RunningClock:
             if is_tare:
                 if last_measurement_end is not None:
                     intervals.append((start, last_measurement_end))
-                start, last_measurement_end = float(last), None
+                start, last_measurement_end = self.positions(last), None
             else:
-                last_measurement_end = float(last)
+                last_measurement_end = self.positions(last)
         if last_measurement_end is not None:
             intervals.append((start, last_measurement_end))
         self.intervals = intervals
 
     @classmethod
     def from_motor_transitions(
-        cls, transitions: list[tuple[str, float]], end_sample_index: float
+        cls,
+        transitions: list[tuple[str, float]],
+        end_sample_index: float,
+        positions: SampleClockPositions | None = None,
     ) -> RunningClock:
         """The clock from the motor's journalled changes (``("started" | "stopped", row index)``, any order);
-        a motor still running at the run's end runs to ``end_sample_index``."""
-        clock = cls([])
+        a motor still running at the run's end runs to row ``end_sample_index``."""
+        clock = cls([], positions)
         start: float | None = None
         for kind, row in sorted(transitions, key=lambda transition: transition[1]):
             if kind == "started" and start is None:
-                start = float(row)
+                start = clock.positions(row)
             elif kind == "stopped" and start is not None:
-                clock.intervals.append((start, float(row)))
+                clock.intervals.append((start, clock.positions(row)))
                 start = None
         if start is not None:
-            clock.intervals.append((start, float(end_sample_index)))
+            clock.intervals.append((start, clock.positions(end_sample_index)))
         return clock
 
     def at(self, sample_index: float) -> float:
-        """Running time up to ``sample_index``, samples."""
-        return float(sum(max(0.0, min(sample_index, end) - begin) for begin, end in self.intervals))
+        """Running time up to row ``sample_index``, samples of the counter."""
+        position = self.positions(sample_index)
+        return float(sum(max(0.0, min(position, end) - begin) for begin, end in self.intervals))
 
 
 @dataclass(frozen=True)
@@ -113,21 +142,27 @@ def middle_sample_index(record: SetPointRecord) -> float:
     return 0.5 * (record.first_sample_index + record.last_sample_index)
 
 
-def running_clock_of(records: list[SetPointRecord]) -> RunningClock:
-    """The running clock of a run from its set-point records: from the motor's changes between standing and
-    running where the sweep journalled them (``motor_transitions``; the motor spins down for seconds after it is
-    told to stop, and warms the balance meanwhile), else from the records alone (:class:`RunningClock`)."""
+def running_clock_of(
+    records: list[SetPointRecord], gaps: Sequence[CounterGap] = ()
+) -> RunningClock:
+    """The running clock of a run from its set-point records and its sample counter's ``gaps``: from the motor's
+    changes between standing and running where the sweep journalled them (``motor_transitions``; the motor spins
+    down for seconds after it is told to stop, and warms the balance meanwhile), else from the records alone
+    (:class:`RunningClock`)."""
+    positions = SampleClockPositions(gaps)
     journalled = [record.extra.get(MOTOR_TRANSITIONS_KEY) for record in records]
     if records and all(transitions is not None for transitions in journalled):
         return RunningClock.from_motor_transitions(
             [(kind, row) for transitions in journalled for kind, row in transitions],
             max(record.last_sample_index for record in records),
+            positions,
         )
     return RunningClock(
         [
             (record.kind == "tare", record.first_sample_index, record.last_sample_index)
             for record in records
-        ]
+        ],
+        positions,
     )
 
 

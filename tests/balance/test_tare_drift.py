@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from ornitail.acquisition.counter_gaps import CounterGap
 from ornitail.acquisition.motor_running_log import MOTOR_TRANSITIONS_KEY
 from ornitail.acquisition.recording_layout import SetPointRecord
 from ornitail.balance.point_covariance import weighted_tare_covariance
@@ -13,6 +14,7 @@ from ornitail.balance.tare_drift import (
     DRIFT_MODEL_QUADRATIC,
     RecordedTare,
     RunningClock,
+    SampleClockPositions,
     drift_check,
     drift_statement,
     running_clock_of,
@@ -77,6 +79,28 @@ def test_shared_tares_covariance_equals_the_sampled_covariance_of_interpolated_z
     sampled = np.cov(zeros)
     assert np.abs(formula - sampled).max() <= 0.02 * np.abs(formula).max()
     assert formula[0, 3] == 0.0  # no tare in common
+
+
+def test_samples_lost_between_rows_still_count_as_running_time():
+    """The motor runs from row 100 to row 1100 of a recording whose link lost 3000 samples before row 400 and 500
+    before row 2000 (after the stop): on the sample counter it ran 4000 samples, not the 1000 rows between; a
+    tare at row 1500 sits at 4000, one at row 2500 too (the loss after the stop is standing time)."""
+    gaps = [
+        CounterGap(400, 10_399, 13_400, 3000, "jump"),
+        CounterGap(2000, 14_999, 15_500, 500, "jump"),
+    ]
+    positions = SampleClockPositions(gaps)
+    assert positions(399) == 399.0 and positions(400) == 3400.0 and positions(2500) == 6000.0
+    clock = RunningClock.from_motor_transitions(
+        [("started", 100), ("stopped", 1100)], 2999, positions
+    )
+    assert clock.intervals == [(100.0, 4100.0)]
+    assert clock.at(1500) == clock.at(2500) == 4000.0
+    assert clock.at(399) == 299.0  # before the gap, rows are samples
+    # Without the gaps the clock would stop for the lost samples: the tare 3000 samples early.
+    assert RunningClock.from_motor_transitions([("started", 100), ("stopped", 1100)], 2999).at(
+        1500
+    ) == 1000.0
 
 
 def test_the_running_clock_counts_only_from_a_tare_to_the_last_point_before_the_next():
