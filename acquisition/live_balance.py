@@ -339,6 +339,12 @@ class LiveBalance:
         """Row index (in the attached recorder) of the first recorded sample the board took at least
         ``samples_since_start`` samples after the stream's first (counters continue across streams); None until
         such a sample has been recorded."""
+        found = self.row_sampled_at(samples_since_start)
+        return None if found is None else found[0]
+
+    def row_sampled_at(self, samples_since_start: int) -> tuple[int, int] | None:
+        """As :meth:`first_row_sampled_after`, with the samples the board took from ``samples_since_start`` up to
+        that row, which the link lost (0 unless the sample fell into a counter gap); None until recorded."""
         with self._lock:
             if self._first_counter is None:
                 return None
@@ -346,7 +352,8 @@ class LiveBalance:
             blocks = list(self._recent_rows)
         for first_row, counters in blocks:
             if counters[-1] >= counter:
-                return first_row + int(np.searchsorted(counters, counter))
+                position = int(np.searchsorted(counters, counter))
+                return first_row + position, max(0, int(counters[position]) - counter)
         return None
 
     def samples_missing_in_rows(self, first_row: int, row_count: int) -> int:

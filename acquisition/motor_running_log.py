@@ -14,11 +14,13 @@ from __future__ import annotations
 from typing import Protocol
 
 MOTOR_TRANSITIONS_KEY = "motor_transitions"
-"""Journal key (a set point's ``extra``): ``[["started" | "stopped", row index], ...]`` since the previous point."""
+"""Journal key (a set point's ``extra``): ``[["started" | "stopped", row index], ...]`` since the previous point; a
+change whose sample the link lost carries a third item, the samples lost from it to that row
+(``["stopped", row, lost]``: it happened ``lost`` samples of the counter before the row)."""
 
 
 class _RowLocator(Protocol):
-    def first_row_sampled_after(self, samples_since_start: int) -> int | None: ...
+    def row_sampled_at(self, samples_since_start: int) -> tuple[int, int] | None: ...
 
 
 class MotorRunningLog:
@@ -68,10 +70,11 @@ class MotorRunningLog:
     def _place(self, stream: _RowLocator) -> None:
         while self._unplaced:
             kind, samples = self._unplaced[0]
-            row = stream.first_row_sampled_after(samples)
-            if row is None:
+            found = stream.row_sampled_at(samples)
+            if found is None:
                 return
-            self._placed.append([kind, row])
+            row, lost = found
+            self._placed.append([kind, row] if lost == 0 else [kind, row, lost])
             self._unplaced.pop(0)
 
     def journal_values(self, stream: _RowLocator) -> dict[str, list[list[str | int]]]:

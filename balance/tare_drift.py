@@ -100,19 +100,21 @@ class RunningClock:
     @classmethod
     def from_motor_transitions(
         cls,
-        transitions: list[tuple[str, float]],
+        transitions: list[tuple],
         end_sample_index: float,
         positions: SampleClockPositions | None = None,
     ) -> RunningClock:
-        """The clock from the motor's journalled changes (``("started" | "stopped", row index)``, any order);
-        a motor still running at the run's end runs to row ``end_sample_index``."""
+        """The clock from the motor's journalled changes (``("started" | "stopped", row index)``, any order, with
+        the samples lost before that row as a third item where the change fell into a counter gap); a motor still
+        running at the run's end runs to row ``end_sample_index``."""
         clock = cls([], positions)
         start: float | None = None
-        for kind, row in sorted(transitions, key=lambda transition: transition[1]):
+        for kind, row, *lost in sorted(transitions, key=lambda transition: transition[1]):
+            position = clock.positions(row) - float(lost[0] if lost else 0)
             if kind == "started" and start is None:
-                start = clock.positions(row)
+                start = position
             elif kind == "stopped" and start is not None:
-                clock.intervals.append((start, clock.positions(row)))
+                clock.intervals.append((start, position))
                 start = None
         if start is not None:
             clock.intervals.append((start, clock.positions(end_sample_index)))
@@ -153,7 +155,7 @@ def running_clock_of(
     journalled = [record.extra.get(MOTOR_TRANSITIONS_KEY) for record in records]
     if records and all(transitions is not None for transitions in journalled):
         return RunningClock.from_motor_transitions(
-            [(kind, row) for transitions in journalled for kind, row in transitions],
+            [tuple(transition) for transitions in journalled for transition in transitions],
             max(record.last_sample_index for record in records),
             positions,
         )

@@ -97,10 +97,16 @@ def test_samples_lost_between_rows_still_count_as_running_time():
     assert clock.intervals == [(100.0, 4100.0)]
     assert clock.at(1500) == clock.at(2500) == 4000.0
     assert clock.at(399) == 299.0  # before the gap, rows are samples
+    # A stop the link lost carries the samples lost from it to the row it was journalled on.
+    lost_stop = RunningClock.from_motor_transitions(
+        [("started", 100), ("stopped", 400, 1000)], 2999, positions
+    )
+    assert lost_stop.intervals == [(100.0, 2400.0)]
     # Without the gaps the clock would stop for the lost samples: the tare 3000 samples early.
-    assert RunningClock.from_motor_transitions([("started", 100), ("stopped", 1100)], 2999).at(
-        1500
-    ) == 1000.0
+    assert (
+        RunningClock.from_motor_transitions([("started", 100), ("stopped", 1100)], 2999).at(1500)
+        == 1000.0
+    )
 
 
 def test_the_running_clock_counts_only_from_a_tare_to_the_last_point_before_the_next():
