@@ -12,13 +12,17 @@ quick and must not block; one that raises is logged and counted by the :class:`D
 goes on. Keys carry their units (``_rad``, ``_m_s``, ``_hz``, ``_s``). Each document also carries
 ``run_metadata``, a copy of the run's ``run.json`` content as it stood (the stop record in the stop document),
 from which the catalog subscriber writes the run's row.
+
+A set point the operator must know about (rows saturated or over the rated load; samples still lost after the
+retakes) carries one line per finding in its document's ``warnings``: there is no separate warning document, a
+warning always belongs to one recorded set point.
 """
 
 from __future__ import annotations
 
 import logging
 import threading
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from typing import Any, Literal
@@ -117,6 +121,9 @@ class SetPointDocument:
     progress : PlanProgress or None
         The plan's progress with this set point counted (None: a run without a plan, e.g. the window's manual
         run).
+    warnings : tuple of str
+        One line per finding the operator must see (saturated or over-range rows, samples still lost after the
+        retakes), each naming the set point; empty for a clean record.
     """
 
     run_id: str
@@ -135,6 +142,7 @@ class SetPointDocument:
     time_utc: str
     run_metadata: Mapping[str, Any] = field(default_factory=dict)
     progress: PlanProgress | None = None
+    warnings: tuple[str, ...] = ()
 
     @classmethod
     def of_record(
@@ -145,8 +153,9 @@ class SetPointDocument:
         time_utc: str,
         run_metadata: Mapping[str, Any],
         progress: PlanProgress | None = None,
+        warnings: Sequence[str] = (),
     ) -> SetPointDocument:
-        """The document of ``record``, the run's ``sequence``-th set point."""
+        """The document of ``record``, the run's ``sequence``-th set point, with its ``warnings`` lines."""
         return cls(
             run_id=run_id,
             sequence=sequence,
@@ -164,6 +173,7 @@ class SetPointDocument:
             time_utc=time_utc,
             run_metadata=run_metadata,
             progress=progress,
+            warnings=tuple(warnings),
         )
 
 
@@ -249,8 +259,14 @@ class RunDocuments:
         self.run_id = recorder.run_id
         self.set_points_recorded = 0
 
-    def set_point(self, record: SetPointRecord, progress: PlanProgress | None = None) -> None:
-        """Emit the document of ``record``, just handed to this run's journal, with its plan's ``progress``."""
+    def set_point(
+        self,
+        record: SetPointRecord,
+        progress: PlanProgress | None = None,
+        warnings: Sequence[str] = (),
+    ) -> None:
+        """Emit the document of ``record``, just handed to this run's journal, with its plan's ``progress`` and the
+        ``warnings`` lines about it."""
         self.set_points_recorded += 1
         self.dispatcher.emit(
             "set_point",
@@ -261,6 +277,7 @@ class RunDocuments:
                 utc_now_iso(),
                 self.recorder.metadata_snapshot(),
                 progress,
+                warnings,
             ),
         )
 

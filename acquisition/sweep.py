@@ -22,10 +22,15 @@ again. A record with saturated or over-range samples is kept, with a warning (pr
 
 Whatever happens, motor and fan are brought to a safe state and every completed set point stays on disk.
 
-Every run is opened by :func:`~ornitail.acquisition.run_engine.open_run`: it emits its start, set point and stop
-documents (:mod:`ornitail.acquisition.run_documents`) to the subscribers of the ``documents`` dispatcher given to
-:func:`run_sweep` (the stop document whatever ends the run), and the catalog subscriber keeps its row. Each set
-point document carries the sweep's progress (set points of the chain done, in the plan, time left).
+A sweep is a plan handed to the run engine: :func:`~ornitail.acquisition.recording_plan.sweep_steps` makes the
+plan's steps (tail changes, runs, moves and settles, records) from the sweep plan and what the chain holds, and
+:func:`~ornitail.acquisition.run_engine.run_plan` runs them with the sweep's performer (:class:`_SweepContext`:
+what each step does on the rig). Every run is opened by :func:`~ornitail.acquisition.run_engine.open_run`: it
+emits its start, set point and stop documents (:mod:`ornitail.acquisition.run_documents`) to the subscribers of
+the ``documents`` dispatcher given to :func:`run_sweep` (the stop document whatever ends the run), and the
+catalog subscriber keeps its row. Each set
+point document carries the sweep's progress (set points of the chain done, in the plan, time left) and the
+warning lines about its record (:func:`record_warnings`).
 """
 
 from __future__ import annotations
@@ -39,7 +44,6 @@ import threading
 from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from itertools import groupby
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -53,9 +57,10 @@ from ornitail.acquisition.recording_layout import (
     RunConfiguration,
     SetPointRecord,
 )
+from ornitail.acquisition.recording_plan import StartRun, sweep_steps
 from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.run_documents import DocumentDispatcher, PlanProgress
-from ornitail.acquisition.run_engine import open_run
+from ornitail.acquisition.run_engine import OpenRun, run_plan
 from ornitail.acquisition.run_files import read_journal, run_is_live
 from ornitail.acquisition.set_point_recording import MAX_RETAKES, POLL_INTERVAL_S
 from ornitail.acquisition.sweep_plan import (
@@ -106,30 +111,22 @@ class SettleTimeout(InstrumentError):
 
 @dataclass(frozen=True)
 class SweepEvent:
-    """Progress of a sweep, passed to the ``on_event`` callback.
+    """What a sweep is doing between its documents, passed to the ``on_event`` callback.
+
+    The sweep's progress (set points done, time left) and its warnings are in the run documents
+    (:mod:`ornitail.acquisition.run_documents`); an event says what the documents do not: the point under way
+    while it moves and settles, and a tail change.
 
     Attributes
     ----------
     stage : str
-        ``"moving"``, ``"settled"``, ``"recorded"``, ``"tail_change"`` or ``"warning"`` (a recorded point the
-        operator must know about: samples saturated or over the rated load, or samples still lost after the
-        retakes; ``message`` is one line naming it).
+        ``"moving"``, ``"settled"``, ``"recorded"`` (after its set point document) or ``"tail_change"``.
     set_point : SetPoint or None
-        The point concerned.
-    completed, total : int
-        Set points done (including those of earlier runs of a resumed sweep) and in the plan.
-    eta_s : float
-        Estimated rig time left, seconds.
-    message : str
-        The warning line (``"warning"`` events only).
+        The point concerned (None at a tail change).
     """
 
     stage: str
     set_point: SetPoint | None
-    completed: int
-    total: int
-    eta_s: float
-    message: str = ""
 
 
 @dataclass
@@ -338,13 +335,19 @@ def _holding_the_chain(sweep: _Sweep) -> _Sweep:
 
 @dataclass
 class _SweepContext:
+    """A sweep's :class:`~ornitail.acquisition.run_engine.PlanPerformer`: what each step of its plan does on the
+    rig, and what the sweep counts meanwhile (set points done, durations, warnings, lossy points, its runs)."""
+
     plan: SweepPlan
     rig: Rig
     stop: SweepStop
     on_event: Callable[[SweepEvent], None]
     completed: int
     stream: LiveBalance
-    documents: DocumentDispatcher
+    data_root: Path
+    operator_prompt: Callable[[str], None]
+    run_directories: list[Path]
+    previous_run_id: str | None
     durations_s: list[float] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     lossy_points: dict[int, str] = field(default_factory=dict)  # plan index -> what it lost
@@ -352,6 +355,10 @@ class _SweepContext:
         default_factory=set
     )  # plan indices whole in earlier runs of the chain
     motor_log: MotorRunningLog = field(default_factory=MotorRunningLog)
+    point_started_s: float = 0.0  # rig time the point under way began to move, s
+    run_points: list[SetPoint] = field(
+        default_factory=list
+    )  # the points recorded into the open run
 
     def observe_motor(self, running: bool) -> None:
         """Note a reading of the motor (running or standing) for the drift clock."""
@@ -390,17 +397,102 @@ class _SweepContext:
         self.durations_s.append(self.rig.now_s() - started_s)
         return PlanProgress(self.completed, len(self.plan.set_points), self.eta_s())
 
-    def emit(self, stage: str, point: SetPoint | None, message: str = "") -> None:
-        self.on_event(
-            SweepEvent(
-                stage, point, self.completed, len(self.plan.set_points), self.eta_s(), message
-            )
+    def emit(self, stage: str, point: SetPoint | None) -> None:
+        self.on_event(SweepEvent(stage, point))
+
+    def warn(self, point: SetPoint, record: SetPointRecord) -> list[str]:
+        """The warning lines about ``point``'s ``record`` (:func:`record_warnings`), kept for the result; they go
+        into its set point document."""
+        lines = record_warnings(point, record)
+        self.warnings.extend(lines)
+        return lines
+
+    # -- the plan's steps -------------------------------------------------------------------------------------
+    def change_tail(self, tail_attached: bool) -> None:
+        """Fit or remove the tail (a person acts on a real rig)."""
+        self.emit("tail_change", None)
+        self.rig.change_tail(tail_attached, self.operator_prompt)
+
+    def recorder(self, step: StartRun) -> Recorder:
+        """The recorder of the sweep's next run, resumed from its previous one."""
+        configuration = RunConfiguration(
+            tail_id=self.plan.tail_id,
+            x_h_m=self.plan.x_h_m,
+            tailed=step.tailed,
+            plan_name=self.plan.name,
+            resumed_from_run_id=self.previous_run_id,
+        )
+        return Recorder(
+            self.data_root,
+            configuration,
+            balance_stream_layout(self.plan.sample_rate_hz),
+            rig_description=self.rig.recording_description(),
+            calibration_files=self.rig.calibration_files(),
+            display_decimation=None,
         )
 
-    def warn(self, point: SetPoint, line: str) -> None:
-        """Keep ``line`` for the result and pass it on as a ``"warning"`` event."""
-        self.warnings.append(line)
-        self.emit("warning", point, line)
+    def progress(self) -> PlanProgress:
+        """Where the sweep stands as a run starts."""
+        return PlanProgress(self.completed, len(self.plan.set_points), self.eta_s())
+
+    @contextmanager
+    def recording_into(self, run: OpenRun) -> Iterator[None]:
+        """Stream the balance into ``run`` for the block; a run that ends with points still lossy after their
+        retakes is marked incomplete, naming them."""
+        recorder = run.recorder
+        self.run_directories.append(recorder.run_directory)
+        self.previous_run_id = recorder.run_id
+        self.run_points = []
+        stream = self.stream
+        if not stream.running or stream.sample_rate_hz != self.plan.sample_rate_hz:
+            stream.stop()
+            stream.start(self.plan.sample_rate_hz)
+        stream.attach(recorder)
+        self.motor_log.start_run()
+        try:
+            yield
+            lossy = [
+                self.lossy_points[p.index] for p in self.run_points if p.index in self.lossy_points
+            ]
+            if lossy:
+                recorder.mark_incomplete(
+                    "; ".join(lossy) + "; resuming the sweep records these points again"
+                )
+        finally:
+            stream.detach()
+
+    def move_and_settle(self, point: SetPoint) -> float:
+        """Move to ``point`` and wait until it holds; the rig time it took to settle, s. A stop requested before
+        it ends the run."""
+        if self.stop.requested:
+            raise RunAborted(f"stopped by the operator before set point #{point.index}")
+        self.point_started_s = self.rig.now_s()
+        self.emit("moving", point)
+        _move(self.rig, point)
+        self.motor_log.commanded(
+            point.flapping_frequency_hz, self.rig.balance_samples_since_start(), self.stream
+        )
+        settle_s = _settle(self, point)
+        self.emit("settled", point)
+        return settle_s
+
+    def record(self, run: OpenRun, point: SetPoint, settle_s: float | None) -> None:
+        """Record ``point`` into ``run``, counted into the sweep, with its warnings in its document."""
+        run.record(
+            self,
+            point,
+            self.plan.sample_rate_hz,
+            settle_s,
+            progress=functools.partial(self.count, point, self.point_started_s),
+            warnings=functools.partial(self.warn, point),
+        )
+        self.run_points.append(point)
+        self.emit("recorded", point)
+
+    def run_stopped(self) -> None:
+        """A stop requested during the run just closed ends the sweep, unless every point is done."""
+        if self.stop.requested and self.completed < len(self.plan.set_points):
+            raise RunAborted("stopped by the operator")
 
 
 def _move(rig: Rig, point: SetPoint) -> None:
@@ -466,94 +558,24 @@ def _settle(context: _SweepContext, point: SetPoint) -> float:
         context.wait_rig_s(POLL_INTERVAL_S)
 
 
-def _run_tail_state(
-    context: _SweepContext,
-    data_root: Path,
-    points: list[SetPoint],
-    previous_run_id: str | None,
-    run_directories: list[Path],
-) -> str:
-    """Record ``points`` (all of one tail state) into one new run; return its run id."""
-    plan, rig = context.plan, context.rig
-    layout = balance_stream_layout(plan.sample_rate_hz)
-    configuration = RunConfiguration(
-        tail_id=plan.tail_id,
-        x_h_m=plan.x_h_m,
-        tailed=points[0].tail_attached,
-        plan_name=plan.name,
-        resumed_from_run_id=previous_run_id,
-    )
-    recorder = Recorder(
-        data_root,
-        configuration,
-        layout,
-        rig_description=rig.recording_description(),
-        calibration_files=rig.calibration_files(),
-        display_decimation=None,
-    )
-    with open_run(
-        recorder,
-        context.documents,
-        set_points_planned=len(points),
-        progress=PlanProgress(context.completed, len(plan.set_points), context.eta_s()),
-    ) as run:
-        run_directories.append(recorder.run_directory)
-        stream = context.stream
-        if not stream.running or stream.sample_rate_hz != plan.sample_rate_hz:
-            stream.stop()
-            stream.start(plan.sample_rate_hz)
-        stream.attach(recorder)
-        context.motor_log.start_run()
-        try:
-            for point in points:
-                if context.stop.requested:
-                    raise RunAborted(f"stopped by the operator before set point #{point.index}")
-                started_s = rig.now_s()
-                context.emit("moving", point)
-                _move(rig, point)
-                context.motor_log.commanded(
-                    point.flapping_frequency_hz, rig.balance_samples_since_start(), context.stream
-                )
-                settle_s = _settle(context, point)
-                context.emit("settled", point)
-                record = run.record(
-                    context,
-                    point,
-                    context.plan.sample_rate_hz,
-                    settle_s,
-                    progress=functools.partial(context.count, point, started_s),
-                )
-                context.emit("recorded", point)
-                _warn_about_record(context, point, record)
-            lossy = [
-                context.lossy_points[p.index] for p in points if p.index in context.lossy_points
-            ]
-            if lossy:
-                recorder.mark_incomplete(
-                    "; ".join(lossy) + "; resuming the sweep records these points again"
-                )
-        finally:
-            stream.detach()
-        return recorder.run_id
-
-
-def _warn_about_record(context: _SweepContext, point: SetPoint, record: SetPointRecord) -> None:
-    """One warning line for a record with saturated or over-range rows, one for a record still lossy."""
+def record_warnings(point: SetPoint, record: SetPointRecord) -> list[str]:
+    """One warning line for a record of ``point`` with saturated or over-range rows, one for a record still lossy
+    after its retakes (none for a clean record)."""
     rows = record.last_sample_index - record.first_sample_index + 1
+    lines = []
     if record.is_flagged:
-        context.warn(
-            point,
+        lines.append(
             f"warning: set point {point.label}: {record.saturated_samples} of {rows} samples saturated (a "
             f"channel at the ADC limit or the board's over-range flag), {record.over_range_samples} over the "
             "balance's rated load; `ornitail process` refuses this point",
         )
     if record.samples_missing_in_record:
-        context.warn(
-            point,
+        lines.append(
             f"warning: set point {point.label}: {record.samples_missing_in_record} of {rows} samples still "
             f"lost inside the record after {MAX_RETAKES} retakes; the run ends incomplete and "
             "resuming the sweep records the point again",
         )
+    return lines
 
 
 @_holding_the_chain
@@ -584,7 +606,7 @@ def run_sweep(
     stop : SweepStop, optional
         Set it (e.g. on the first Ctrl-C) to stop after the current point.
     on_event : callable, optional
-        Receives a :class:`SweepEvent` at every stage (progress bars, GUIs).
+        Receives a :class:`SweepEvent` at every stage: the point under way, tail changes.
     operator_prompt : callable, optional
         Called with an instruction when a person must act (fit or remove the tail on a real rig).
     balance_stream : LiveBalance, optional
@@ -593,7 +615,8 @@ def run_sweep(
     documents : DocumentDispatcher, optional
         Receives the start, set point and stop documents of every run the sweep records
         (:mod:`ornitail.acquisition.run_documents`); the stop document whatever ends the run. Set point documents
-        carry the sweep's progress (:class:`~ornitail.acquisition.run_documents.PlanProgress`).
+        carry the sweep's progress (:class:`~ornitail.acquisition.run_documents.PlanProgress`) and the warning
+        lines about their record (also in the result's ``warnings``).
 
     Raises
     ------
@@ -609,17 +632,14 @@ def run_sweep(
     stop = stop or SweepStop()
     chain = previous_sweep_chain(RunCatalog(data_root), plan) if resume else []
     done = completed_plan_points(chain, plan)
-    missing = {point.index for point in plan.set_points if point.index not in done}
-    # A point recorded again gets its zero in its own run: its bracketing tares are recorded again with it.
-    again = missing | zero_references(plan.set_points, missing)
-    remaining = [point for point in plan.set_points if point.index in again]
+    steps = sweep_steps(plan, done)
     result = SweepResult(
         status="completed",
         run_directories=list(chain),
         completed_points=len(done),
         total_points=len(plan.set_points),
     )
-    if not missing:
+    if not steps:
         result.message = "nothing to do: every set point of this plan is already recorded"
         return result
     stream = balance_stream or LiveBalance(rig, sample_rate_hz=plan.sample_rate_hz)
@@ -630,20 +650,15 @@ def run_sweep(
         on_event or (lambda event: None),
         completed=len(done),
         stream=stream,
-        documents=documents or DocumentDispatcher(),
+        data_root=data_root,
+        operator_prompt=operator_prompt or _refuse_operator_action,
+        run_directories=result.run_directories,
+        previous_run_id=chain[-1].name if chain else None,
         recorded_before=done,
     )
-    previous_run_id = chain[-1].name if chain else None
     rig.mount_vehicle(plan.tail_id, plan.x_h_m)
     try:
-        for tail_attached, group in groupby(remaining, key=lambda point: point.tail_attached):
-            context.emit("tail_change", None)
-            rig.change_tail(tail_attached, operator_prompt or _refuse_operator_action)
-            previous_run_id = _run_tail_state(
-                context, data_root, list(group), previous_run_id, result.run_directories
-            )
-            if stop.requested and context.completed < len(plan.set_points):
-                raise RunAborted("stopped by the operator")
+        run_plan(steps, context, documents or DocumentDispatcher())
     except RunAborted as reason:
         result.status, result.message = "aborted", str(reason)
     except InstrumentError as error:

@@ -222,22 +222,38 @@ def _operator_prompt(instruction: str) -> None:
 
 class ProgressFromDocuments:
     """A subscriber of the sweep's run documents that moves ``progress`` at each run's start and set point
-    document: the set points of the chain done and the time left, as the document's
-    :class:`~ornitail.acquisition.run_documents.PlanProgress` says them."""
+    document (the set points of the chain done and the time left, as the document's
+    :class:`~ornitail.acquisition.run_documents.PlanProgress` says them) and prints the warning lines a set point
+    document carries.
+
+    Attributes
+    ----------
+    eta_s : float or None
+        The time left the last document said, s (None before the first).
+    """
 
     def __init__(self, progress: Progress) -> None:
         self.progress = progress
+        self.eta_s: float | None = None
 
     def __call__(self, name: DocumentName, document: Document) -> None:
-        """Update the progress from a start or set point document that carries the plan's progress."""
+        """Update the progress from a start or set point document that carries the plan's progress; print the
+        set point document's warnings."""
         if isinstance(document, RunStart) and document.progress is not None:
-            self.progress.update(document.progress.done, document.progress.eta_s)
-        elif isinstance(document, SetPointDocument) and document.progress is not None:
-            self.progress.update(
-                document.progress.done,
-                document.progress.eta_s,
-                f"#{document.plan_point_index} recorded",
-            )
+            self.eta_s = document.progress.eta_s
+            self.progress.update(document.progress.done, self.eta_s)
+        elif isinstance(document, SetPointDocument):
+            if document.progress is not None:
+                self.eta_s = document.progress.eta_s
+                self.progress.update(
+                    document.progress.done, self.eta_s, f"#{document.plan_point_index} recorded"
+                )
+            for line in document.warnings:
+                self.progress.message(line)
+
+    def point_under_way(self, label: str) -> None:
+        """Name the set point being moved to beside the count of those done (the count does not change)."""
+        self.progress.update(self.progress.done, self.eta_s, label)
 
 
 def run_sweep_with_progress(
@@ -298,16 +314,14 @@ def _connect_and_sweep(
         rig.connect()
         with Progress(f"sweep {plan.name}", len(plan.set_points), "set points") as progress:
             documents = DocumentDispatcher()
-            documents.subscribe(ProgressFromDocuments(progress))
+            from_documents = ProgressFromDocuments(progress)
+            documents.subscribe(from_documents)
 
-            def on_event(event: SweepEvent) -> None:
-                if event.stage == "moving":  # the point under way, beside the count of those done
-                    label = event.set_point.label if event.set_point else ""
-                    progress.update(progress.done, event.eta_s, label)
+            def on_event(event: SweepEvent) -> None:  # what the documents do not say
+                if event.stage == "moving" and event.set_point is not None:
+                    from_documents.point_under_way(event.set_point.label)
                 elif event.stage == "tail_change":
                     progress.stage("tail change")
-                elif event.stage == "warning":
-                    progress.message(event.message)
 
             result = run_sweep(
                 plan,

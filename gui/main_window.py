@@ -3,6 +3,11 @@
 A ~30 Hz timer drives everything the display does: drain the session's messages, drain the balance's display
 feed into the rings, one ``setData`` per curve, the status strip. Acquisition and recording run in their own
 threads and never wait for it.
+
+The window subscribes to the run documents of everything the session records (:attr:`RigSession.documents`):
+they arrive in the recording thread, so the subscriber only queues each one among the session's messages, in
+order with them, and the timer shows it. The sweep panel takes its progress and ETA from the documents, the log
+the warnings they carry, and the Runs tab lists a run again when its stop document arrives.
 """
 
 from __future__ import annotations
@@ -11,6 +16,7 @@ import time
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
+from ornitail.acquisition.run_documents import Document, RunStop, SetPointDocument
 from ornitail.gui.controls_panel import ControlsPanel
 from ornitail.gui.cycle_view import CycleView
 from ornitail.gui.design_tab import DesignTab
@@ -61,6 +67,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.frames = 0
         self.frames_per_s = 0.0
         self._frame_clock = (time.monotonic(), 0)
+        self.documents_token = session.documents.subscribe(
+            lambda name, document: session.post("document", name, document)
+        )
         self.timer = QtCore.QTimer(self)
         self.timer.setTimerType(QtCore.Qt.TimerType.PreciseTimer)
         self.timer.timeout.connect(self.tick)
@@ -126,20 +135,36 @@ class MainWindow(QtWidgets.QMainWindow):
             self.data.reset_for_rig()
             self.controls.set_rig_limits()
             self.log.add(message.text)
+        elif message.kind == "document":
+            self.show_document(message.payload)
         elif message.kind == "sweep_event":
             self.sweep_panel.show_event(message.payload)
-            if message.payload.stage in ("recorded", "tail_change", "warning"):
+            if message.payload.stage == "tail_change":
                 self.log.add(message.text)
         elif message.kind == "sweep_done":
             self.sweep_panel.show_done(message.payload)
             self.log.add(message.text)
-            self.runs_tab.reload()
         elif message.kind == "prompt":
             self._prompt(message.text, message.payload)
         else:
             self.log.add(message.text)
-        if message.kind == "info" and message.text.startswith("run "):
-            self.runs_tab.reload()
+
+    def show_document(self, document: Document) -> None:
+        """Show one run document: a plan's progress in the sweep panel, a set point of a plan and its warnings in
+        the log, a stopped run in the Runs tab."""
+        progress = getattr(document, "progress", None)
+        if progress is not None:
+            self.sweep_panel.show_progress(progress)
+        if isinstance(document, SetPointDocument):
+            if progress is not None:
+                self.log.add(
+                    f"recorded {document.kind} #{document.plan_point_index} "
+                    f"({progress.done}/{progress.total})"
+                )
+            for line in document.warnings:
+                self.log.add(line)
+        elif isinstance(document, RunStop):
+            self.runs_tab.run_stopped(document)
 
     def _prompt(self, instruction: str, done) -> None:
         box = QtWidgets.QMessageBox(
@@ -155,4 +180,5 @@ class MainWindow(QtWidgets.QMainWindow):
         """Safe state and disconnect before the window goes."""
         self.timer.stop()
         self.session.shutdown()
+        self.session.documents.unsubscribe(self.documents_token)
         super().closeEvent(event)

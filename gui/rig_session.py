@@ -30,10 +30,12 @@ from ornitail.acquisition.recording_layout import (
     SET_POINT_KIND_MEASUREMENT,
     SET_POINT_KIND_TARE,
     RunConfiguration,
+    SetPointRecord,
 )
+from ornitail.acquisition.recording_plan import RecordSetPoint
 from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.run_documents import DocumentDispatcher
-from ornitail.acquisition.run_engine import OpenRun, open_run
+from ornitail.acquisition.run_engine import OpenRun, open_run, run_plan
 from ornitail.acquisition.sweep import SweepEvent, SweepResult
 from ornitail.acquisition.sweep_plan import SetPoint, SettleCriteria, load_plan
 from ornitail.calibration.ati_calibration import AtiCalibration
@@ -55,7 +57,8 @@ SHUTDOWN_TIMEOUT_S = 60.0
 class SessionMessage:
     """Something for the window: ``kind`` is ``"info"``, ``"error"`` (instrument or bug), ``"user_error"``
     (a :class:`UserInputError`), ``"sweep_event"``, ``"sweep_done"``, ``"prompt"`` (``payload`` is a
-    :class:`threading.Event` to set once the person has acted), ``"connected"`` or ``"tare"``."""
+    :class:`threading.Event` to set once the person has acted), ``"connected"``, ``"tare"`` or ``"document"`` (a
+    run document the window subscribed to: ``text`` is its name, ``payload`` the document)."""
 
     kind: str
     text: str
@@ -67,10 +70,13 @@ class ManualRecording:
     """The manual run being recorded: the run :func:`~ornitail.acquisition.run_engine.open_run` opened (and the
     stack that closes it), the rig and balance stream it records from, its tares.
 
-    It is the :class:`~ornitail.acquisition.set_point_recording.RecordingContext` of the window's records: tares
-    and points become rows of the run exactly as a sweep's do (by the board's sample counter, retaken when samples
-    were lost, with the conditions read during the record and the motor's starts and stops), each recorded with
-    :meth:`OpenRun.record`, so the run emits its start, set point and stop documents as a sweep's runs do.
+    It is the :class:`~ornitail.acquisition.set_point_recording.RecordingContext` of the window's records and the
+    performer of their plans: each Tare and Record is a one-step plan (a
+    :class:`~ornitail.acquisition.recording_plan.RecordSetPoint`) that
+    :func:`~ornitail.acquisition.run_engine.run_plan` runs inside the open run. Tares and points become rows of the
+    run exactly as a sweep's do (by the board's sample counter, retaken when samples were lost, with the conditions
+    read during the record and the motor's starts and stops), each recorded with :meth:`OpenRun.record`, so the run
+    emits its start, set point and stop documents as a sweep's runs do.
     """
 
     run: OpenRun
@@ -81,6 +87,7 @@ class ManualRecording:
     motor_log: MotorRunningLog = field(default_factory=MotorRunningLog)
     points: int = 0
     tare_pitches_rad: list[float] = field(default_factory=list)
+    last_record: SetPointRecord | None = None
 
     @property
     def recorder(self) -> Recorder:
@@ -95,6 +102,11 @@ class ManualRecording:
     def observe_motor(self, running: bool) -> None:
         """Note a reading of the motor (running or standing) for the drift clock."""
         self.motor_log.observe(running, self.rig.balance_samples_since_start(), self.stream)
+
+    def record(self, run: OpenRun, point: SetPoint, settle_s: float | None) -> None:
+        """Record ``point`` into ``run`` (this run) as its next set point, at the stream's sample rate."""
+        self.last_record = run.record(self, point, self.stream.sample_rate_hz, settle_s)
+        self.points += 1
 
     def has_tare_at(self, pitch_rad: float) -> bool:
         """Whether the run holds a wind-off tare at this commanded pitch (rad)."""
@@ -463,8 +475,8 @@ class RigSession:
         velocity_m_s: float,
         frequency_hz: float,
     ) -> None:
-        """Record ``record_s`` from now on into the manual run as its next set point (commanded values, SI)."""
-        assert self.live is not None
+        """Record ``record_s`` from now on into the manual run as its next set point (commanded values, SI): a
+        one-step plan run inside the open run."""
         point = SetPoint(
             index=recording.points,
             kind=kind,  # type: ignore[arg-type]
@@ -476,8 +488,9 @@ class RigSession:
             repeat=0,
             record_s=record_s,
         )
-        record = recording.run.record(recording, point, self.live.sample_rate_hz)
-        recording.points += 1
+        run_plan((RecordSetPoint(point),), recording, self.documents, run=recording.run)
+        record = recording.last_record
+        assert record is not None
         rows = record.last_sample_index - record.first_sample_index + 1
         lost = (
             f", {record.samples_missing_in_record} samples lost inside it after its retakes"
@@ -610,7 +623,5 @@ _COMMANDED = {
 
 
 def _event_text(event: SweepEvent) -> str:
-    if event.message:  # a warning: saturated samples, or samples still lost after the retakes
-        return event.message
     point = "" if event.set_point is None else f" {event.set_point.label}"
-    return f"{event.stage}{point} ({event.completed}/{event.total})"
+    return f"{event.stage.replace('_', ' ')}{point}"

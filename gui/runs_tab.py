@@ -11,7 +11,14 @@ from typing import Any
 
 from PySide6 import QtWidgets
 
-from ornitail.acquisition.catalog import CatalogEntry, RunCatalog
+from ornitail.acquisition.catalog import (
+    CATALOG_FILE_NAME,
+    CatalogEntry,
+    RunCatalog,
+    catalog_entry_from_run_metadata,
+)
+from ornitail.acquisition.recording_layout import RUNS_FOLDER_NAME
+from ornitail.acquisition.run_documents import RunStop
 from ornitail.balance.process_runs import process_runs
 from ornitail.core.normal_quantiles import NORMAL_QUANTILE_95
 from ornitail.gui.background_job import BackgroundJobs
@@ -116,14 +123,25 @@ class RunsTab(QtWidgets.QWidget):
 
     def reload(self) -> None:
         """Read the catalog again (newest run first)."""
-        if not (self.data_root / "catalog.sqlite").exists():
-            self.runs = []
-        else:
-            self.runs = sorted(
-                RunCatalog(self.data_root).find_runs(),
-                key=lambda run: run.start_time_utc,
-                reverse=True,
+        self._show(self._catalog_runs())
+
+    def run_stopped(self, stop: RunStop) -> None:
+        """Read the catalog again, listing the run ``stop`` ended as its stop record says (the catalog may take
+        the stop record a moment later)."""
+        runs = {run.run_id: run for run in self._catalog_runs()}
+        if stop.run_metadata:
+            runs[stop.run_id] = catalog_entry_from_run_metadata(
+                dict(stop.run_metadata), f"{RUNS_FOLDER_NAME}/{stop.run_id}"
             )
+        self._show(list(runs.values()))
+
+    def _catalog_runs(self) -> list[CatalogEntry]:
+        if not (self.data_root / CATALOG_FILE_NAME).exists():
+            return []
+        return RunCatalog(self.data_root).find_runs()
+
+    def _show(self, runs: list[CatalogEntry]) -> None:
+        self.runs = sorted(runs, key=lambda run: run.start_time_utc, reverse=True)
         self.table.setRowCount(len(self.runs))
         for row, run in enumerate(self.runs):
             for column, text in enumerate(_catalog_row(run)):

@@ -1,4 +1,5 @@
-"""Sweep controls: a plan file, Run / Pause / Resume / Abort, progress with ETA and the current set point."""
+"""Sweep controls: a plan file, Run / Pause / Resume / Abort, progress with ETA (from the run documents) and the
+current set point."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ from pathlib import Path
 
 from PySide6 import QtWidgets
 
+from ornitail.acquisition.run_documents import PlanProgress
 from ornitail.acquisition.sweep import SweepEvent, SweepResult
 from ornitail.gui.form_widgets import FilePicker
 from ornitail.gui.rig_session import RigSession
@@ -20,7 +22,8 @@ def format_eta(seconds: float, time_scale: float) -> str:
 
 
 class SweepPanel(QtWidgets.QGroupBox):
-    """Runs a plan through :class:`RigSession`; :meth:`show_event` / :meth:`show_done` update progress."""
+    """Runs a plan through :class:`RigSession`; :meth:`show_progress` (from the run documents),
+    :meth:`show_event` (the point under way) and :meth:`show_done` update what it shows."""
 
     def __init__(self, session: RigSession, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__("Sweep plan", parent)
@@ -52,13 +55,16 @@ class SweepPanel(QtWidgets.QGroupBox):
         self.abort_button.clicked.connect(session.abort_sweep)
         self.last_result: SweepResult | None = None
 
-    def show_event(self, event: SweepEvent) -> None:
-        """Progress bar, ETA and the point being worked on."""
-        self.progress.setRange(0, event.total)
-        self.progress.setValue(event.completed)
+    def show_progress(self, progress: PlanProgress) -> None:
+        """Progress bar and ETA as a run document of the sweep says them."""
+        self.progress.setRange(0, progress.total)
+        self.progress.setValue(progress.done)
         rig = self.session.rig
         scale = rig.time_scale if rig is not None else 1.0
-        self.eta.setText(f"ETA {format_eta(event.eta_s, scale)} (m:ss)")
+        self.eta.setText(f"ETA {format_eta(progress.eta_s, scale)} (m:ss)")
+
+    def show_event(self, event: SweepEvent) -> None:
+        """The point being worked on (moving, settled, recorded) or the tail change."""
         if event.set_point is not None:
             self.current.setText(f"{event.stage}: {event.set_point.label}")
         else:

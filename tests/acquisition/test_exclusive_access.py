@@ -13,6 +13,7 @@ from ornitail.acquisition.exclusive_locks import ExclusiveLock, LockHeld
 from ornitail.acquisition.flapping_motor_driver import FlappingMotorDriver
 from ornitail.acquisition.instrument_errors import InstrumentInUse
 from ornitail.acquisition.rig import Rig
+from ornitail.acquisition.run_documents import DocumentDispatcher
 from ornitail.acquisition.sweep import SweepChainBusy, run_sweep
 from ornitail.acquisition.sweep_plan import plan_from_document
 
@@ -108,14 +109,19 @@ def test_a_second_sweep_of_a_chain_being_recorded_is_refused_naming_the_run(tmp_
         except BaseException as error:  # noqa: BLE001 - handed to the test thread
             refusals.append(error)
 
-    def on_event(event):
-        if event.stage == "recorded" and event.completed == 1:
+    documents, done = DocumentDispatcher(), [0]
+    documents.subscribe(
+        lambda name, document: done.append(document.progress.done) if name == "set_point" else None
+    )
+
+    def on_event(event):  # once the first set point is recorded, as its document says
+        if event.stage == "recorded" and done[-1] == 1:
             thread = threading.Thread(target=second_sweep)
             thread.start()
             thread.join(120)
 
     with Rig.from_file(time_scale=5.0) as rig_a:
-        result = run_sweep(plan, rig_a, tmp_path, on_event=on_event)
+        result = run_sweep(plan, rig_a, tmp_path, on_event=on_event, documents=documents)
     assert result.status == "completed" and result.completed_points == 3
     (refusal,) = refusals
     assert isinstance(refusal, SweepChainBusy)

@@ -1,8 +1,11 @@
 """Run documents: the dispatcher, a recorder's run framed by start and stop, a run the engine opens (documents
-and catalog row), and the documents of sweeps on the simulated rig (completed, aborted, failed), with a subscriber
-that raises on every document."""
+and catalog row), a plan the engine runs step by step, the CLI's progress and warnings taken from them, and the
+documents of sweeps on the simulated rig (completed, aborted, failed), with a subscriber that raises on every
+document."""
 
+import io
 import json
+from contextlib import contextmanager
 
 import numpy as np
 import pytest
@@ -16,17 +19,27 @@ from ornitail.acquisition.recording_layout import (
     SetPointRecord,
     StreamLayout,
 )
+from ornitail.acquisition.recording_plan import (
+    ChangeTail,
+    MoveAndSettle,
+    RecordSetPoint,
+    StartRun,
+    StopRun,
+)
 from ornitail.acquisition.recording_reader import load_recording
 from ornitail.acquisition.run_documents import (
     DocumentDispatcher,
+    PlanProgress,
     RunStart,
     RunStop,
     SetPointDocument,
     documented_run,
 )
-from ornitail.acquisition.run_engine import open_run
+from ornitail.acquisition.run_engine import open_run, run_plan
 from ornitail.acquisition.sweep import SweepStop, run_sweep
 from ornitail.acquisition.sweep_plan import plan_from_document
+from ornitail.app.progress import Progress
+from ornitail.app.sweep_session import ProgressFromDocuments
 
 SHORT_PLAN = {
     "plan": {"name": "short"},
@@ -167,6 +180,93 @@ def test_a_run_the_engine_opens_carries_its_metadata_and_keeps_its_catalog_row_w
     assert (entry.exit_status, entry.set_point_count) == ("failed", 1)
 
 
+class FakePerformer:
+    """A plan performer without a rig: notes each call; its record writes 100 rows and journals them."""
+
+    def __init__(self, data_root, fail_on_move=False):
+        self.data_root, self.fail_on_move, self.calls = data_root, fail_on_move, []
+
+    def change_tail(self, tail_attached):
+        self.calls.append(("change_tail", tail_attached))
+
+    def recorder(self, step):
+        self.calls.append(("recorder", step.tailed))
+        return Recorder(
+            self.data_root,
+            RunConfiguration(tail_id="S3", x_h_m=0.098, tailed=step.tailed, plan_name="fake"),
+            StreamLayout([ChannelSpec("gauge_0", "V")], sample_rate_hz=1000.0),
+        )
+
+    def progress(self):
+        return PlanProgress(0, 1, 10.0)
+
+    @contextmanager
+    def recording_into(self, run):
+        self.calls.append(("recording_into", run.recorder.run_id))
+        yield
+        self.calls.append(("recorded_into", run.recorder.run_id))
+
+    def move_and_settle(self, point):
+        self.calls.append(("move_and_settle", point.index))
+        if self.fail_on_move:
+            raise RuntimeError("strut jammed")
+        return 1.5
+
+    def record(self, run, point, settle_s):
+        self.calls.append(("record", point.index, settle_s))
+        run.recorder.put_block(np.arange(100), np.zeros((100, 1)))
+        record = SetPointRecord(point.index, point.kind, 0, 99, point.pitch_rad, 0.0, 0.0, True)
+        run.recorder.complete_set_point(record)
+        run.documents.set_point(record, PlanProgress(1, 1, 0.0))
+
+    def run_stopped(self):
+        self.calls.append(("run_stopped",))
+
+
+def test_the_engine_runs_a_plan_step_by_step_opening_and_closing_its_run(tmp_path):
+    point = plan_from_document(SHORT_PLAN, "short.toml").set_points[0]
+    dispatcher, received = collecting_dispatcher()
+    performer = FakePerformer(tmp_path)
+    steps = (
+        ChangeTail(True),
+        StartRun(True, 1),
+        MoveAndSettle(point),
+        RecordSetPoint(point),
+        StopRun(),
+    )
+    run_plan(steps, performer, dispatcher)
+    (documents,) = runs_of(received)
+    start, (set_point,), stop = assert_framed_run(
+        documents, tmp_path / "runs" / received[0][1].run_id
+    )
+    run_id = start.run_id
+    assert performer.calls == [
+        ("change_tail", True),
+        ("recorder", True),
+        ("recording_into", run_id),
+        ("move_and_settle", point.index),
+        ("record", point.index, 1.5),
+        ("recorded_into", run_id),
+        ("run_stopped",),
+    ]
+    assert (start.set_points_planned, start.progress) == (1, PlanProgress(0, 1, 10.0))
+    assert set_point.progress == PlanProgress(1, 1, 0.0) and stop.exit_status == "completed"
+
+
+def test_a_plan_that_fails_mid_run_closes_its_run_as_failed(tmp_path):
+    point = plan_from_document(SHORT_PLAN, "short.toml").set_points[0]
+    dispatcher, received = collecting_dispatcher()
+    performer = FakePerformer(tmp_path, fail_on_move=True)
+    steps = (StartRun(True, 1), MoveAndSettle(point), RecordSetPoint(point), StopRun())
+    with pytest.raises(RuntimeError, match="strut jammed"):
+        run_plan(steps, performer, dispatcher)
+    assert [name for name, _ in received] == ["start", "stop"]
+    stop = received[-1][1]
+    assert (stop.exit_status, stop.reason) == ("failed", "RuntimeError: strut jammed")
+    assert ("record", point.index, 1.5) not in performer.calls
+    assert ("run_stopped",) not in performer.calls
+
+
 def test_a_completed_sweep_emits_start_set_points_and_stop_per_run_despite_a_raising_subscriber(
     simulated_rig, tmp_path
 ):
@@ -195,6 +295,36 @@ def test_a_completed_sweep_emits_start_set_points_and_stop_per_run_despite_a_rai
     assert {document.progress.total for document in set_points} == {len(plan.set_points)}
     assert all(document.progress.eta_s > 0 for document in set_points[:-1])
     assert set_points[-1].progress.eta_s == 0.0
+    assert all(document.warnings == () for document in set_points)  # every record clean
+
+
+def test_the_cli_takes_progress_and_warnings_from_the_documents():
+    stream = io.StringIO()
+    progress = Progress("sweep short", 4, "set points", stream=stream, clock=lambda: 0.0)
+    from_documents = ProgressFromDocuments(progress)
+    record = SetPointRecord(
+        2,
+        "measurement",
+        100,
+        1299,
+        0.44,
+        0.8,
+        13.5,
+        True,
+        saturated_samples=1200,
+        over_range_samples=1200,
+    )
+    line = "warning: set point #2 (measurement): 1200 of 1200 samples saturated"
+    from_documents(
+        "set_point",
+        SetPointDocument.of_record(
+            "r", 1, record, "2026-01-01T00:00:00+00:00", {}, PlanProgress(3, 4, 12.0), [line]
+        ),
+    )
+    assert (progress.done, from_documents.eta_s) == (3, 12.0)
+    assert stream.getvalue().splitlines() == [line]
+    from_documents.point_under_way("#3 (measurement)")  # the count stays the documents'
+    assert progress.done == 3
 
 
 def test_an_aborted_sweep_ends_its_run_with_an_aborted_stop_document(simulated_rig, tmp_path):

@@ -14,6 +14,7 @@ from ornitail.acquisition import live_balance, set_point_recording
 from ornitail.acquisition.catalog import RunCatalog
 from ornitail.acquisition.instrument_errors import InstrumentError
 from ornitail.acquisition.recording_reader import load_recording
+from ornitail.acquisition.run_documents import DocumentDispatcher
 from ornitail.acquisition.sweep import SweepStop, completed_plan_points, run_sweep
 from ornitail.acquisition.sweep_plan import plan_from_document, zero_references
 from ornitail.balance.sweep_table import cycle_averaged_table
@@ -43,6 +44,15 @@ def motor_spins_down(rig, within_rig_s=5.0):
             return True
         rig.wait_simulated_s(0.1)
     return False
+
+
+def counting_documents():
+    """A dispatcher and a list whose last item is the set points of the plan done, as the run documents say."""
+    dispatcher, done = DocumentDispatcher(), [0]
+    dispatcher.subscribe(
+        lambda name, document: done.append(document.progress.done) if name == "set_point" else None
+    )
+    return dispatcher, done
 
 
 def short_plan(**protocol):
@@ -174,12 +184,15 @@ def test_stop_request_finishes_the_point_and_resume_completes_the_rest(simulated
 def test_abort_drops_the_point_in_progress_and_leaves_the_rig_safe(simulated_rig, tmp_path):
     plan = short_plan()
     stop = SweepStop()
+    documents, done = counting_documents()
 
     def on_event(event):  # abort while the third point settles: it is never journalled
-        if event.stage == "moving" and event.completed == 2:
+        if event.stage == "moving" and done[-1] == 2:
             stop.abort()
 
-    result = run_sweep(plan, simulated_rig, tmp_path, stop=stop, on_event=on_event)
+    result = run_sweep(
+        plan, simulated_rig, tmp_path, stop=stop, on_event=on_event, documents=documents
+    )
     assert (result.status, result.completed_points) == ("aborted", 2)
     assert "aborted by the operator" in result.message
     run = load_recording(result.run_directories[0])
@@ -192,11 +205,13 @@ def test_abort_drops_the_point_in_progress_and_leaves_the_rig_safe(simulated_rig
 def test_unplugged_fan_fails_the_run_naming_it_and_keeps_what_was_recorded(simulated_rig, tmp_path):
     plan = short_plan()
 
+    documents, done = counting_documents()
+
     def on_event(event):
-        if event.stage == "recorded" and event.completed == 2:
+        if event.stage == "recorded" and done[-1] == 2:
             threading.Timer(0.05, simulated_rig.simulators.fan.unplug).start()
 
-    result = run_sweep(plan, simulated_rig, tmp_path, on_event=on_event)
+    result = run_sweep(plan, simulated_rig, tmp_path, on_event=on_event, documents=documents)
     assert result.status == "failed"
     assert "fan" in result.message.lower()
     recording = load_recording(result.run_directories[0])
@@ -269,11 +284,13 @@ def test_unplugged_balance_fails_the_run_naming_it_and_keeps_what_was_recorded(
 ):
     plan = short_plan()
 
+    documents, done = counting_documents()
+
     def on_event(event):
-        if event.stage == "recorded" and event.completed == 2:
+        if event.stage == "recorded" and done[-1] == 2:
             threading.Timer(0.05, simulated_rig.simulators.daq_board.unplug).start()
 
-    result = run_sweep(plan, simulated_rig, tmp_path, on_event=on_event)
+    result = run_sweep(plan, simulated_rig, tmp_path, on_event=on_event, documents=documents)
     assert result.status == "failed"
     assert simulated_rig.balance.name in result.message and "failed" in result.message
     recording = load_recording(result.run_directories[0])

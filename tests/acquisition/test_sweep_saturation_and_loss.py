@@ -18,6 +18,7 @@ from ornitail.acquisition import catalog_sync
 from ornitail.acquisition.catalog import CATALOG_FILE_NAME, RunCatalog
 from ornitail.acquisition.live_balance import LiveBalance
 from ornitail.acquisition.recording_reader import load_recording
+from ornitail.acquisition.run_documents import DocumentDispatcher
 from ornitail.acquisition.set_point_recording import MAX_RETAKES
 from ornitail.acquisition.sweep import run_sweep
 from ornitail.acquisition.sweep_plan import plan_from_document, zero_references
@@ -75,26 +76,30 @@ def test_a_gauge_held_at_the_rail_is_reported_from_the_sweep_to_process(
 ):
     board = simulated_rig.simulators.daq_board
     target = first_tailed_measurement(plan)
-    events = []
 
     def on_event(event):
-        events.append(event)
         if event.set_point is not None and event.set_point.index == target.index:
             if event.stage == "moving":
                 board.hold_gauge_at_rail(1)  # +32767 counts: Fy = -84 N, beyond the 50 N rating
             elif event.stage == "recorded":
                 board.release_gauge(1)
 
+    documents = DocumentDispatcher()
+    set_points = []
+    documents.subscribe(
+        lambda name, document: set_points.append(document) if name == "set_point" else None
+    )
     data_root = tmp_path / "data"
-    result = run_sweep(plan, simulated_rig, data_root, on_event=on_event)
+    result = run_sweep(plan, simulated_rig, data_root, on_event=on_event, documents=documents)
     assert result.status == "completed" and exit_code_of(result) == 0
 
-    # The sweep: one warning line, for that point only, as an event and in the result.
-    warnings = [event for event in events if event.stage == "warning"]
-    assert [event.set_point.index for event in warnings] == [target.index]
-    assert result.warnings == [warnings[0].message]
-    assert f"#{target.index} " in warnings[0].message
-    assert f"{RECORD_ROWS} of {RECORD_ROWS} samples saturated" in warnings[0].message
+    # The sweep: one warning line, for that point only, in its set point document and in the result.
+    warned = [document for document in set_points if document.warnings]
+    assert [document.plan_point_index for document in warned] == [target.index]
+    (line,) = warned[0].warnings
+    assert result.warnings == [line]
+    assert f"#{target.index} " in line
+    assert f"{RECORD_ROWS} of {RECORD_ROWS} samples saturated" in line
 
     # The journal: the whole record saturated and over the rating; every other point clean.
     tailed = load_recording(result.run_directories[0])
@@ -172,9 +177,19 @@ def test_a_point_lossy_through_its_retakes_ends_the_sweep_incomplete_and_resume_
             elif event.stage == "recorded":
                 board.stop_dropping()
 
+    documents = DocumentDispatcher()
+    set_points = []
+    documents.subscribe(
+        lambda name, document: set_points.append(document) if name == "set_point" else None
+    )
     data_root = tmp_path / "data"
-    result = run_sweep(plan, simulated_rig, data_root, on_event=on_event)
+    result = run_sweep(plan, simulated_rig, data_root, on_event=on_event, documents=documents)
     assert result.status == "incomplete", result.message
+    # The still lossy record's set point document carries the warning the operator sees; no other does.
+    warned = [document for document in set_points if document.warnings]
+    assert [document.plan_point_index for document in warned] == [target.index]
+    (line,) = warned[0].warnings
+    assert result.warnings == [line] and "still lost inside the record" in line
     assert exit_code_of(result) == EXIT_INCOMPLETE == 4
     assert result.incomplete_points == [target.index], result.message
     assert result.completed_points == len(plan.set_points) - 1

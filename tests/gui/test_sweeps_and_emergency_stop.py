@@ -69,6 +69,8 @@ def test_abort_pause_resume_complete_and_process_a_sweep(connected_at_2_khz, qtb
     panel = window.sweep_panel
     _run_plan(window, qtbot, tmp_path, panel.run_button)
     qtbot.waitUntil(lambda: panel.progress.value() >= 2, timeout=60_000)
+    # Count and ETA come from the run documents' plan progress (the window subscribes to them).
+    assert panel.progress.maximum() == TOTAL_POINTS and panel.eta.text() != "ETA -"
     assert panel.eta.text().startswith("ETA ") and "SWEEP RUNNING" in window.status.recording.text()
     # The sweep records through the window's balance stream: the live view keeps moving while it runs (200 rows: 1 s
     # of rig time at the display's 200 Hz, a tenth of the 2 kHz stream).

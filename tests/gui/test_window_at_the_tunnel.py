@@ -1,4 +1,5 @@
-"""The window driving the simulated rig: connect, limits, tare, manual recording, cycle view, frozen window."""
+"""The window driving the simulated rig: connect, limits, tare, manual recording, cycle view, frozen window; and
+what the window shows of the run documents alone."""
 
 import math
 import time
@@ -6,7 +7,16 @@ import time
 import numpy as np
 
 from ornitail.acquisition.catalog import RunCatalog
+from ornitail.acquisition.recorder import Recorder
+from ornitail.acquisition.recording_layout import (
+    ChannelSpec,
+    RunConfiguration,
+    SetPointRecord,
+    StreamLayout,
+)
 from ornitail.acquisition.recording_reader import load_recording
+from ornitail.acquisition.run_documents import PlanProgress
+from ornitail.acquisition.run_engine import open_run
 
 
 def test_connect_shows_status_live_values_and_refuses_a_pitch_outside_the_limits(connected, qtbot):
@@ -118,3 +128,37 @@ def test_a_frozen_window_loses_no_recorded_sample(connected, qtbot, tmp_path):
     assert (
         int(frame["last_sample_index"].iloc[0] - frame["first_sample_index"].iloc[0] + 1) == 10_000
     )
+
+
+def test_the_window_shows_progress_warnings_and_stopped_runs_from_the_documents_alone(
+    window, tmp_path
+):
+    recorder = Recorder(
+        tmp_path,
+        RunConfiguration(tail_id="S3", x_h_m=0.098, tailed=True, plan_name="short"),
+        StreamLayout([ChannelSpec("gauge_0", "V")], sample_rate_hz=1000.0),
+    )
+    panel, line = (
+        window.sweep_panel,
+        "warning: set point #1 (measurement): 100 of 100 samples saturated",
+    )
+    with open_run(
+        recorder, window.session.documents, set_points_planned=2, progress=PlanProgress(0, 2, 30.0)
+    ) as run:
+        window.tick()
+        assert (panel.progress.value(), panel.progress.maximum()) == (0, 2)
+        recorder.put_block(np.arange(100), np.zeros((100, 1)))
+        record = SetPointRecord(1, "measurement", 0, 99, 0.44, 0.8, 13.5, True)
+        recorder.complete_set_point(record)
+        run.documents.set_point(record, PlanProgress(1, 2, 15.0), [line])
+        window.tick()
+        assert (panel.progress.value(), panel.progress.maximum()) == (1, 2)
+        assert panel.eta.text() == "ETA 0:15 (m:ss)"  # no rig: rig time is wall time
+        assert line in window.log.toPlainText()
+        assert "recorded measurement #1 (1/2)" in window.log.toPlainText()
+        assert window.runs_tab.table.rowCount() == 0  # nothing listed it yet
+    window.tick()
+    # The stop document lists the run as its stop record says, whether or not the catalog has it yet.
+    assert window.runs_tab.table.rowCount() == 1
+    assert window.runs_tab.table.item(0, 0).text() == recorder.run_id
+    assert window.runs_tab.table.item(0, 1).text() == "completed"
