@@ -41,7 +41,7 @@ from ornitail.acquisition.instrument_errors import InstrumentError
 from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE, RigDescription, read_rig_file
 from ornitail.acquisition.rig_simulation import RigSimulation, simulation_backend
 from ornitail.calibration.ati_calibration import AtiCalibration
-from ornitail.calibration.hotwire_laws import HotwireLaw
+from ornitail.calibration.hotwire_laws import HotwireLaw, load_hotwire_law
 from ornitail.calibration.tunnel_table import TunnelVelocityTable
 from ornitail.core.errors import UserInputError, require_finite
 
@@ -81,6 +81,11 @@ class Rig:
         self._simulation = simulation_backend(description)
         self.calibration = AtiCalibration.from_file(description.calibration_path)
         self.tunnel_table = TunnelVelocityTable.from_csv(description.tunnel_table_path)
+        self._hotwire_law = (
+            None
+            if description.hotwire_law_path is None
+            else load_hotwire_law(description.hotwire_law_path)
+        )
         limits = description.limits
         table_low, table_high = (
             float(self.tunnel_table.velocity_m_s[0]),
@@ -393,7 +398,10 @@ class Rig:
         return time.monotonic() * self._time_scale
 
     def hotwire_law(self) -> HotwireLaw | None:
-        """The law of the rig's hot-wire when the rig knows it (the simulated instruments' own), else None."""
+        """The law of the rig's hot-wire when the rig knows it: the rig file's ``[tunnel].hotwire_law``, else the
+        simulated instruments' own, else None."""
+        if self._hotwire_law is not None:
+            return self._hotwire_law
         return self._simulation.hotwire_law() if self._simulation is not None else None
 
     def mount_vehicle(self, tail_id: str, x_h_m: float) -> None:

@@ -51,7 +51,7 @@ _ALLOWED_KEYS = {
     "balance.serial_daq": {"port", "baud", "sample_rate_hz"},
     "balance.aux_daq": {"port", "baud", "sample_rate_hz"},
     "balance.can": {"interface", "channel", "bit_rate", "base_id", "sample_rate_hz"},
-    "tunnel": {"table"},
+    "tunnel": {"table", "hotwire_law"},
     "fan": {"port", "baud", "backend"},
     "strut": {"port", "baud", "backend"},
     "motor": {"port", "baud", "backend", "gear_ratio"},
@@ -127,6 +127,9 @@ class RigDescription:
     limits: SafetyLimits
     simulator_control: Path | None = None
     """Control socket of simulated instruments served by another process (``rig_simulator_server``), or None."""
+    hotwire_law_path: Path | None = None
+    """``[tunnel].hotwire_law``: the rig's hot-wire calibration (a law file of ``ornitail calibrate hotwire``), or
+    None."""
     aux_daq: SerialDaqSettings | None = None
     """``[balance.aux_daq]``: the ORNI-DAQ9 board as auxiliary acquisition beside a CAN or Net F/T balance, or
     None."""
@@ -345,6 +348,7 @@ def read_rig_file(path: str | Path) -> RigDescription:
         serial_daq=serial_daq,
         can=can_settings,
         tunnel_table_path=tunnel.file("table"),
+        hotwire_law_path=tunnel.file("hotwire_law") if "hotwire_law" in tunnel.table else None,
         fan=fan_settings,
         strut=strut_settings,
         motor=motor_settings,

@@ -138,6 +138,39 @@ def test_a_simulated_rig_without_simulated_instruments_installed_is_one_line(tmp
     assert "'rig.simulated' in the group 'ornitail.instruments'" in caught.value.problem
 
 
+def test_a_rig_file_names_its_hot_wire_law_and_a_missing_one_is_one_line(tmp_path):
+    """A real rig's ``[tunnel].hotwire_law``: the window's live view converts the bridge voltage with it (the
+    law here is a King's law with other constants than the simulated hot-wire's, so it wins on a simulated rig)."""
+    text = (
+        'law = "king"\nreference_temperature_k = 293.15\nwire_temperature_k = 523.15\na_v2 = 1.7\n'
+        'b = 0.9\nexponent_n = 0.5\npoints_content_hash = "test"\npoint_count = 9\n'
+        "rms_residual_m_s = 0.01\nmax_abs_residual_m_s = 0.02\n"
+    )
+    for folder, simulated in (("real", "false"), ("simulated", "true")):
+        (tmp_path / folder).mkdir()
+        (tmp_path / folder / "law.toml").write_text(text)
+        rig = Rig.from_file(
+            write_rig(
+                tmp_path / folder,
+                {
+                    "simulated = true": f"simulated = {simulated}",
+                    'table = "files/table.csv"': 'table = "files/table.csv"\nhotwire_law = "law.toml"',
+                },
+            )
+        )
+        law = rig.hotwire_law()
+        assert isinstance(law, KingsLaw) and (law.a_v2, law.b, law.exponent_n) == (1.7, 0.9, 0.5)
+    (tmp_path / "absent").mkdir()
+    path = write_rig(
+        tmp_path / "absent",
+        {'table = "files/table.csv"': 'table = "files/table.csv"\nhotwire_law = "gone.toml"'},
+    )
+    with pytest.raises(UserInputError) as caught:
+        read_rig_file(path)
+    assert caught.value.where == f"{path}: [tunnel].hotwire_law"
+    assert "'gone.toml' not found" in caught.value.problem
+
+
 def test_the_rig_file_chooses_the_simulation_and_its_hot_wire_law(tmp_path):
     (tmp_path / "real").mkdir()
     simulated = Rig.from_file(write_rig(tmp_path))
