@@ -6,8 +6,8 @@ simulator (DAQ board or NETCANOEM) draws samples from its thread; every call goe
 With the rig's clock, a change of the operating point takes effect at the sample taken at the rig time it was made,
 not at the next sample generated: a board thread held up by a busy host generates the samples it owes later, in
 one block, and without the time stamp that whole block would carry the state of the moment it was generated (a
-wind-off tare recorded with the motor already started again for the next point, the Hall signal seconds behind
-the motor on a loaded host).
+change made while the board was held up would reach samples taken before it: a motor start, into the end of a
+wind-off tare).
 """
 
 from __future__ import annotations
