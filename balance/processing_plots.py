@@ -39,7 +39,8 @@ def save_figure(figure: Figure, path_without_suffix: Path) -> list[Path]:
     """Write ``<path>.png`` (150 dpi) and ``<path>.pdf``; close the figure; return both paths.
 
     Every figure here lays itself out (``tight_layout``, with room kept for its legend), so it is saved at its own
-    size: a tight bounding box would draw each file twice (processing took 45 % longer with it)."""
+    size: a tight bounding box would draw each file twice (processing a short sweep took 1.16x as long with it,
+    ``benchmarks/processing_figures.py``)."""
     paths = [path_without_suffix.with_suffix(".png"), path_without_suffix.with_suffix(".pdf")]
     for path in paths:
         figure.savefig(path, dpi=150)
