@@ -109,7 +109,11 @@ class ExternalDemo:
         deadline = time.monotonic() + timeout_s
         while not returncode_file.exists():
             if time.monotonic() > deadline:
-                raise TimeoutError(f"the demo in {self.folder} did not end within {timeout_s:g} s")
+                stderr = (self.folder / "stderr").read_text(errors="replace").splitlines()
+                raise TimeoutError(
+                    f"the demo in {self.folder} did not end within {timeout_s:g} s; the end of its stderr:\n"
+                    + "\n".join(stderr[-30:])
+                )
             time.sleep(EXTERNAL_DEMO_POLL_S)
         returncode = returncode_file.read_text().strip()
         while not returncode:  # written but not yet flushed

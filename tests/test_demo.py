@@ -14,6 +14,9 @@ from ornitail.sim.configuration import study_configuration
 from ornitail.sim.tunnel import true_cycle_average
 
 
+@pytest.mark.timeout(
+    660
+)  # above the wait below, so a demo that does not end fails with its own log
 def test_demo_records_the_study_protocol_and_prints_cycle_averaged_loads(background_demo):
     # `ornitail demo --json` as a user runs it, started when collection ended (tests/conftest.py); 600 s is five
     # times its length on a quiet machine.
