@@ -17,6 +17,7 @@ from scipy.signal import savgol_filter
 
 from ornitail.core.errors import UserInputError
 from ornitail.flight.discretisation import continuous_jacobian_function
+from ornitail.flight.fisher_information import fisher_information, weighted_score
 from ornitail.flight.identification_result import IdentificationResult
 from ornitail.flight.model_data import ModelData
 from ornitail.flight.model_file import StateSpaceModelSpec
@@ -42,6 +43,12 @@ def smoothed_with_derivative(
 
 def _matrix_stack(jacobian: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     return jacobian.T.reshape(-1, shape[1], shape[0]).transpose(0, 2, 1)
+
+
+def _regressors(matrix_derivatives: np.ndarray, signals: np.ndarray) -> np.ndarray:
+    """(samples, rows, parameters): d (matrix @ signal) / d parameter from d matrix / d parameter (parameters, rows,
+    columns) and the signals (samples, columns)."""
+    return np.tensordot(signals, matrix_derivatives, axes=([1], [2])).transpose(0, 2, 1)
 
 
 def estimate_equation_error(
@@ -77,13 +84,9 @@ def estimate_equation_error(
             _matrix_stack(evaluated[4 + i], shapes[i])[free_indices] for i in range(4)
         )
         state_prediction = states @ a.T + inputs @ b.T
-        state_regressors = np.einsum("jab,kb->kaj", d_a, states) + np.einsum(
-            "jab,kb->kaj", d_b, inputs
-        )
+        state_regressors = _regressors(d_a, states) + _regressors(d_b, inputs)
         output_prediction = states @ c.T + inputs @ d.T
-        output_regressors = np.einsum("jab,kb->kaj", d_c, states) + np.einsum(
-            "jab,kb->kaj", d_d, inputs
-        )
+        output_regressors = _regressors(d_c, states) + _regressors(d_d, inputs)
         return (
             np.concatenate([state_prediction, output_prediction[:, used_outputs]], axis=1),
             np.concatenate([state_regressors, output_regressors[:, used_outputs]], axis=1),
@@ -106,8 +109,8 @@ def estimate_equation_error(
         residuals = targets - prediction
         weights = 1.0 / variances
         design = regressors[:, :, estimable]
-        information = np.einsum("kci,c,kcj->ij", design, weights, design)
-        gradient = np.einsum("kci,c,kc->i", design, weights, residuals)
+        information = fisher_information(design, weights)
+        gradient = weighted_score(design, weights, residuals)
         try:
             step = np.linalg.solve(information, gradient)
         except np.linalg.LinAlgError:
@@ -128,7 +131,7 @@ def estimate_equation_error(
     residuals = targets - prediction
     weights = 1.0 / variances
     design = regressors[:, :, estimable]
-    information = np.einsum("kci,c,kcj->ij", design, weights, design)
+    information = fisher_information(design, weights)
     size = len(free_names)
     covariance = np.full((size, size), np.nan)
     covariance_colored = np.full((size, size), np.nan)

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ornitail.flight.discretisation import discretise
+from ornitail.flight.fisher_information import fisher_information
 from ornitail.flight.identification_result import IdentificationResult
 from ornitail.flight.linear_simulation import output_sensitivities, simulate_outputs
 from ornitail.flight.model_data import ModelData
@@ -230,10 +231,8 @@ def _newton_terms(
     (M minus the term from R's dependence on theta: (2/N) sum_o g_o g_o^T / R_o^2 with
     g_o = sum_k S_ok v_ok), and the descent direction sum_o g_o / R_o.
     """
-    count, outputs, size = sensitivities.shape
-    weighted = sensitivities * np.sqrt(1.0 / variances)[None, :, None]
-    flat = weighted.reshape(count * outputs, size)
-    information = flat.T @ flat
+    count = sensitivities.shape[0]
+    information = fisher_information(sensitivities, 1.0 / variances)
     per_output = np.einsum("koi,ko->oi", sensitivities, residuals)
     gradient = (per_output / variances[:, None]).sum(axis=0)
     correction = (per_output / variances[:, None]).T @ (per_output / variances[:, None])
@@ -280,7 +279,7 @@ def _finish(
     if np.all(np.isfinite(residuals)) and np.all(np.isfinite(sensitivities)):
         variances = noise_variances(residuals, signals.outputs)
         weights = 1.0 / variances
-        information = np.einsum("koi,o,koj->ij", sensitivities, weights, sensitivities)
+        information = fisher_information(sensitivities, weights)
         condition = np.linalg.cond(information)
         if condition < 1e14:
             covariance = np.linalg.inv(information)
