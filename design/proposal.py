@@ -178,6 +178,7 @@ class Proposal:
     geometry: TailGeometry
     x_h_m: float
     objective: str
+    targets: DesignTargets
     evaluation: DesignEvaluation
     damping_ratio_in_problem: float
     natural_frequency_in_problem_rad_s: float
@@ -807,6 +808,7 @@ def propose(
         geometry=geometry,
         x_h_m=float(vector[4]),
         objective=objective,
+        targets=targets,
         evaluation=evaluation,
         damping_ratio_in_problem=best.damping_ratio,
         natural_frequency_in_problem_rad_s=best.natural_frequency_rad_s,

@@ -12,7 +12,13 @@ from typing import Any
 from ornitail.core.errors import UserInputError, require_finite
 from ornitail.core.normal_quantiles import NORMAL_QUANTILE_95
 from ornitail.design.design_evaluation import IntervalEstimate, PredictedQuantity
-from ornitail.design.proposal import MAX_STARTS, DesignTargets, Proposal, TargetBand
+from ornitail.design.proposal import (
+    MAX_STARTS,
+    TARGET_NAMES,
+    DesignTargets,
+    Proposal,
+    TargetBand,
+)
 from ornitail.design.trends import TrendModel
 from ornitail.vehicle.geometry import require_tail_position_mm
 
@@ -136,16 +142,71 @@ def extrapolation_notes(proposal: Proposal, trend_model: TrendModel) -> dict[str
     }
 
 
+_INTERVAL_KINDS = {"mean": "of the mean trend", "new": "for a new flight"}
+_CROSSING_FRACTION = 1e-3
+"""An interval reaches past a target's edge when it does by more than this fraction of its half-width (a robust
+target, value - k sigma at the edge, is met to the solver's tolerance)."""
+
+
+def targets_within_their_noise(proposal: Proposal) -> list[str]:
+    """The targets the design meets by its predicted value whose 95 % interval (the proposal's kind: mean trend or
+    new flight) still reaches past the target's edge, one phrase each in user units ("damping ratio 0.014 to 0.64
+    reaches below 0.25")."""
+    if not proposal.targets_met:
+        return []
+    evaluation = proposal.evaluation
+    quantities = evaluation.quantities
+    estimates = (
+        quantities.get("theta_ss_rad"),
+        quantities.get("v_ss_m_s"),
+        quantities.get("f_ss_hz"),
+        evaluation.damping_ratio,
+        evaluation.natural_frequency_rad_s,
+    )
+    phrases = []
+    for name, band, estimate in zip(TARGET_NAMES, proposal.targets.bands(), estimates, strict=True):
+        if band is None or estimate is None:
+            continue
+        low, high = IntervalEstimate(
+            estimate.value, estimate.sigma_mean, estimate.sigma_new
+        ).interval_95(proposal.interval_kind)
+        margin = _CROSSING_FRACTION * (high - low) / 2
+        unit, scale = _UNMET_UNITS[name]
+        shown = f"{name.replace('_', ' ')} {low * scale:.3g} to {high * scale:.3g}{' ' + unit if unit else ''}"
+        below, above = low < band.lower - margin, high > band.upper + margin
+        if below and above:
+            phrases.append(
+                f"{shown} reaches past both ends of {band.lower * scale:.3g} to {band.upper * scale:.3g}"
+            )
+        elif below:
+            phrases.append(f"{shown} reaches below {band.lower * scale:.3g}")
+        elif above:
+            phrases.append(f"{shown} reaches above {band.upper * scale:.3g}")
+    return phrases
+
+
 def honest_status(proposal: Proposal, extrapolated: int, trends: int) -> str:
-    """The solver status, saying "targets met by extrapolation" when the design lies outside the fitted data of
-    ``extrapolated`` of the ``trends`` trends (their intervals assume the trend holds there)."""
-    if not (proposal.targets_met and extrapolated):
+    """The solver status, qualified when the targets are met: "by extrapolation" when the design lies outside the
+    fitted data of ``extrapolated`` of the ``trends`` trends (their intervals assume the trend holds there), "by the
+    predicted values only" when a target's 95 % interval reaches past its edge."""
+    if not proposal.targets_met:
+        return proposal.solver_status
+    qualifiers = []
+    if extrapolated:
+        qualifiers.append(
+            f"by extrapolation ({extrapolated} of {trends} trends outside their fitted data; "
+            "their intervals assume the trend holds there)"
+        )
+    within_noise = targets_within_their_noise(proposal)
+    if within_noise:
+        qualifiers.append(
+            f"by the predicted values only (95 % intervals {_INTERVAL_KINDS[proposal.interval_kind]}: "
+            f"{'; '.join(within_noise)})"
+        )
+    if not qualifiers:
         return proposal.solver_status
     return proposal.solver_status.replace(
-        "targets met",
-        f"targets met by extrapolation ({extrapolated} of {trends} trends outside their fitted data; "
-        "their intervals assume the trend holds there)",
-        1,
+        "targets met", "targets met " + " and ".join(qualifiers), 1
     )
 
 
@@ -166,6 +227,8 @@ def proposal_result(proposal: Proposal, trend_model: TrendModel) -> dict[str, An
         "solver_status": honest_status(proposal, len(notes), len(trend_model.trends)),
         "targets_met": proposal.targets_met,
         "targets_met_inside_fitted_data": proposal.targets_met and not notes,
+        "targets_met_by_their_95_percent_intervals": proposal.targets_met
+        and not targets_within_their_noise(proposal),
         "unmet_targets": {
             f"{name}_miss{('_' + _UNMET_UNITS[name][0].replace('/', '_')) if _UNMET_UNITS[name][0] else ''}": miss
             * _UNMET_UNITS[name][1]

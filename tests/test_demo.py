@@ -93,6 +93,11 @@ def test_demo_records_the_study_protocol_and_prints_cycle_averaged_loads(backgro
         mode["damping_ratio_in_problem"], abs=1e-6
     )
     assert mode["damping_ratio"]["value"] >= 0.25 - 1e-6
+    # The headline never overstates: a floor met by the predicted damping while its 95 % interval for a new flight
+    # reaches below it is "met by the predicted values only".
+    within_noise = mode["damping_ratio"]["interval_95_new"][0] < 0.25 - 1e-6
+    assert design["targets_met_by_their_95_percent_intervals"] is not within_noise
+    assert ("by the predicted values only" in design["solver_status"]) is within_noise
     poles = np.array([complex(p["real"], p["imag"]) for p in design["poles"]])
     oscillatory = poles[np.abs(poles.imag) > 1e-9]
     zeta_from_poles = -oscillatory.real[0] / abs(oscillatory[0])

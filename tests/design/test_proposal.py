@@ -17,6 +17,7 @@ from scipy.optimize import brentq
 
 from ornitail.app.cli import main
 from ornitail.app.commands.design import design_group
+from ornitail.core.normal_quantiles import NORMAL_QUANTILE_95
 from ornitail.design.design_evaluation import MassInertiaModel, evaluate_design
 from ornitail.design.drawing import CUT_FILE_MARGIN_MM, cut_file_svg
 from ornitail.design.linear_model import a_matrix, characteristic_polynomial, modal_summary
@@ -29,6 +30,7 @@ from ornitail.design.proposal import (
     propose,
     sobol_start_points,
 )
+from ornitail.design.proposal_report import honest_status, targets_within_their_noise
 from ornitail.design.trend_data import TrendObservation
 from ornitail.design.trends import fit_trends
 from ornitail.vehicle.geometry import TailGeometry, study_tails
@@ -127,10 +129,9 @@ def test_min_area_finds_the_hand_computed_optimum(exact_problem, zeta_target: fl
     assert "target damping_ratio (lower bound)" in proposal.binding_constraints
 
 
-@pytest.mark.parametrize("robust_k", [0.0, 1.0])
-def test_damping_inside_the_problem_equals_numpy_eigenvalues(robust_k: float) -> None:
-    trend_model = constructed_trend_model(noise_fraction=0.02)
-    proposal = propose(
+def proposal_at_a_damping_floor(trend_model, robust_k: float):
+    """The smallest tail at 98 mm with zeta - k sigma_new >= 0.35."""
+    return propose(
         trend_model,
         DesignTargets(damping_ratio_min=0.35),
         robust_k=robust_k,
@@ -139,6 +140,12 @@ def test_damping_inside_the_problem_equals_numpy_eigenvalues(robust_k: float) ->
         start_count=4,
         mass_inertia=CONSTANT_MASS,
     )
+
+
+@pytest.mark.parametrize("robust_k", [0.0, 1.0])
+def test_damping_inside_the_problem_equals_numpy_eigenvalues(robust_k: float) -> None:
+    trend_model = constructed_trend_model(noise_fraction=0.02)
+    proposal = proposal_at_a_damping_floor(trend_model, robust_k)
     evaluation = evaluate_design(trend_model, proposal.geometry, proposal.x_h_m, CONSTANT_MASS)
     # factor equalities hold to IPOPT's 1e-9; zeta is well conditioned (simple complex pair)
     assert proposal.damping_ratio_in_problem == pytest.approx(
@@ -153,6 +160,27 @@ def test_damping_inside_the_problem_equals_numpy_eigenvalues(robust_k: float) ->
     )
     robust = evaluation.damping_ratio.value - robust_k * evaluation.damping_ratio.sigma_new
     assert robust == pytest.approx(0.35, abs=1e-5)
+
+
+def test_a_floor_met_by_the_predicted_value_alone_is_said_so_and_a_robust_one_is_not() -> None:
+    trend_model = constructed_trend_model(noise_fraction=0.02)
+
+    # Without the robust term the damping sits on its floor: half the new flights fall below it.
+    nominal = proposal_at_a_damping_floor(trend_model, 0.0)
+    assert nominal.targets_met
+    low, high = nominal.evaluation.damping_ratio.interval_95("new")
+    assert low < 0.35 < high
+    (phrase,) = targets_within_their_noise(nominal)
+    assert phrase == f"damping ratio {low:.3g} to {high:.3g} reaches below 0.35"
+    status = honest_status(nominal, extrapolated=0, trends=len(trend_model.trends))
+    assert status.startswith(
+        "targets met by the predicted values only (95 % intervals for a new flight: damping ratio"
+    )
+    # With k = 1.96 the interval's lower end is the floor (to the solver's tolerance): a plain "targets met".
+    robust = proposal_at_a_damping_floor(trend_model, NORMAL_QUANTILE_95)
+    assert robust.evaluation.damping_ratio.interval_95("new")[0] == pytest.approx(0.35, abs=1e-5)
+    assert targets_within_their_noise(robust) == []
+    assert honest_status(robust, 0, len(trend_model.trends)).startswith("targets met; IPOPT")
 
 
 def test_early_stop_of_multi_start_keeps_the_optimum(exact_problem) -> None:
