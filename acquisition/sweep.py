@@ -687,18 +687,26 @@ def run_sweep(
     return result
 
 
-def run_sweep_to_completion(
-    plan: SweepPlan, rig: Rig, data_root: Path, resumes: int = 3, **options: Any
-) -> SweepResult:
-    """:func:`run_sweep`, then its resume while it ends ``incomplete`` (records still lossy after their retakes:
-    a host too busy to read the link in time), at most ``resumes`` times, as a user would; the last result,
-    whose ``run_directories`` hold the whole chain. ``options`` go to every call."""
-    result = run_sweep(plan, rig, data_root, **options)
+def resumed_while_incomplete(sweep: Callable[[bool], SweepResult], resumes: int = 3) -> SweepResult:
+    """``sweep(False)``, then ``sweep(True)`` (its resume) while it ends ``incomplete`` (records still lossy after
+    their retakes: a host too busy to read the link in time), at most ``resumes`` times, as a user would; the last
+    result, whose ``run_directories`` hold the whole chain."""
+    result = sweep(False)
     for _ in range(resumes):
         if result.status != "incomplete":
             break
-        result = run_sweep(plan, rig, data_root, resume=True, **options)
+        result = sweep(True)
     return result
+
+
+def run_sweep_to_completion(
+    plan: SweepPlan, rig: Rig, data_root: Path, resumes: int = 3, **options: Any
+) -> SweepResult:
+    """:func:`run_sweep` resumed while it ends ``incomplete`` (:func:`resumed_while_incomplete`). ``options`` go to
+    every call."""
+    return resumed_while_incomplete(
+        lambda resume: run_sweep(plan, rig, data_root, resume=resume, **options), resumes
+    )
 
 
 def _refuse_operator_action(instruction: str) -> None:

@@ -1,11 +1,12 @@
 """``ornitail demo``: the main job on the simulated rig, end to end.
 
 Runs the study's tunnel protocol (the shipped plan) on the shipped simulated rig, faster than real time: wind-off
-tares, the tailed steady state and sweeps, the tailless steady state; then processes the runs as ``ornitail process``
-does (cycle averages, tail contribution, stability derivatives, plots) and prints the steady-state loads with and
-without tail, their 2-sigma spread over cycles, the tail's contribution and the derivatives with their sigma.
-Finally it flies a small simulated campaign, fits trends against tail geometry and proposes a tail
-(:mod:`ornitail.app.demo_design`).
+tares, the tailed steady state and sweeps, the tailless steady state (resumed, up to three times, when a host too
+busy to read the board's link in time leaves a record lossy through its retakes); then processes the runs as
+``ornitail process`` does (cycle averages, tail contribution, stability derivatives, plots) and prints the
+steady-state loads with and without tail, their 2-sigma spread over cycles, the tail's contribution and the
+derivatives with their sigma. Finally it flies a small simulated campaign, fits trends against tail geometry and
+proposes a tail (:mod:`ornitail.app.demo_design`).
 """
 
 from __future__ import annotations
@@ -264,6 +265,7 @@ def demo_command(data_root: Path | None, time_scale: float, as_json: bool) -> No
 
     from ornitail.acquisition.catalog import default_data_root
     from ornitail.acquisition.rig_file import DEFAULT_RIG_FILE
+    from ornitail.acquisition.sweep import resumed_while_incomplete
     from ornitail.app.demo_design import design_from_simulated_campaign
     from ornitail.app.sweep_session import (
         check_time_scale_option,
@@ -278,9 +280,13 @@ def demo_command(data_root: Path | None, time_scale: float, as_json: bool) -> No
     data_root = data_root or default_data_root()
     plan_resource = files("ornitail.acquisition") / "data" / "study_tunnel_plan.toml"
     with as_file(plan_resource) as plan_path:
-        sweep = guarded(
-            lambda: run_sweep_with_progress(
-                plan_path, DEFAULT_RIG_FILE, data_root, time_scale=time_scale
+        # A host too busy to read the board's link in time leaves a record lossy through its retakes; the demo
+        # resumes the sweep for it, as a user would (the sweep's warning on stderr names the point).
+        sweep = resumed_while_incomplete(
+            lambda resume: guarded(
+                lambda: run_sweep_with_progress(
+                    plan_path, DEFAULT_RIG_FILE, data_root, resume=resume, time_scale=time_scale
+                )
             )
         )
     result: dict[str, Any] = {"sweep": sweep_result_record(sweep)}

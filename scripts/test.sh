@@ -18,8 +18,12 @@ fi
 
 demo_folder="$(mktemp -d -t ornitail-demo-XXXXXX)"
 (
-  .venv/bin/ornitail demo --data-root "$demo_folder/data" --json >"$demo_folder/stdout" 2>"$demo_folder/stderr"
-  echo $? >"$demo_folder/returncode"
+  # `set -e` holds in this subshell too: without the `||` a failing demo ended it before its return code was
+  # written, and the demo's test waited out its whole deadline for a demo long gone.
+  status=0
+  .venv/bin/ornitail demo --data-root "$demo_folder/data" --json >"$demo_folder/stdout" 2>"$demo_folder/stderr" ||
+    status=$?
+  echo "$status" >"$demo_folder/returncode"
 ) &
 demo_job=$!
 cleanup() {
