@@ -28,14 +28,12 @@ Exit code 0 when both targets are met, 1 when one is missed, 2 for a bad option 
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
-import time
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 import pandas as pd
+from benchmark_timing import median_time_s
 
 from ornitail.app.cli_output import emit
 from ornitail.balance.cycle_averages import _cycle_sample_bounds, cycle_means
@@ -82,16 +80,6 @@ def pandas_cycle_means(data: np.ndarray, cycles: FlapCycles) -> np.ndarray:
     for index, (first, stop) in enumerate(bounds):
         cycle_id[first:stop] = index
     return pd.DataFrame(data).groupby(cycle_id).mean().drop(index=-1, errors="ignore").to_numpy()
-
-
-def median_time_s(action: Callable[[], Any], repeats: int) -> tuple[float, Any]:
-    """Median wall time of ``repeats`` runs of ``action`` and its last result."""
-    times, result = [], None
-    for _ in range(repeats):
-        started = time.perf_counter()
-        result = action()
-        times.append(time.perf_counter() - started)
-    return statistics.median(times), result
 
 
 def run(minutes: float, repeats: int) -> dict[str, Any]:

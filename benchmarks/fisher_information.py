@@ -18,14 +18,12 @@ Exit code 0 when the matrix product is faster than the baseline, 1 otherwise, 2 
 
 from __future__ import annotations
 
-import argparse
-import statistics
 import sys
-import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 
 import numpy as np
+from benchmark_timing import alternating_medians_s, repeats_and_json_options
 
 from ornitail.app.cli_output import emit
 from ornitail.flight import equation_error, output_error
@@ -72,19 +70,9 @@ def einsum_baseline() -> Iterator[None]:
             setattr(module, name, function)
 
 
-def timed_s(analyse: Callable[[], object]) -> float:
-    started = time.perf_counter()
-    analyse()
-    return time.perf_counter() - started
-
-
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--json", action="store_true")
-    arguments = parser.parse_args(argv)
-    if arguments.repeats < 1:
-        print("fisher_information: --repeats must be >= 1", file=sys.stderr)
+    arguments = repeats_and_json_options("fisher_information", __doc__.splitlines()[0], argv)
+    if arguments is None:
         return 2
     campaign = CampaignSpec(
         (configuration_from_label("S1@98", "benchmark", simulated_manoeuvres=20),), seed=SEED
@@ -97,15 +85,11 @@ def main(argv: list[str] | None = None) -> int:
         return analyse_configuration(configuration, data, spec, SEED)
 
     analyse()  # imports and CasADi functions warm
-    matrix_product, baseline = [], []
-    for _ in range(arguments.repeats):
-        matrix_product.append(timed_s(analyse))
-        with einsum_baseline():
-            baseline.append(timed_s(analyse))
+    matrix_product_s, einsum_s = alternating_medians_s(analyse, einsum_baseline, arguments.repeats)
     record = {
         "repeats": arguments.repeats,
-        "analysis_matrix_product_s": statistics.median(matrix_product),
-        "analysis_einsum_s": statistics.median(baseline),
+        "analysis_matrix_product_s": matrix_product_s,
+        "analysis_einsum_s": einsum_s,
     }
     record["einsum_over_matrix_product"] = (
         record["analysis_einsum_s"] / record["analysis_matrix_product_s"]

@@ -4,8 +4,8 @@ Processing saves three figures, each as PNG and PDF (``balance/processing_plots.
 itself out (``tight_layout`` with room for its legend), so it is saved at its own size; the baseline, measured in
 the same process on the same recording, saves them as processing did before, with ``bbox_inches="tight"``, which
 draws each file twice to find its box. A short sweep (steady state tailed and tailless, one pitch, one velocity,
-one frequency point; 2 kHz) is recorded once on the simulated rig; both variants process it ``--repeats`` times
-and the medians are compared. Printed: both medians and their ratio (one JSON object with ``--json``).
+one frequency point; 2 kHz) is recorded once on the simulated rig; both variants process it ``--repeats`` times,
+alternating, and the medians are compared. Printed: both medians and their ratio (one JSON object with ``--json``).
 
 Usage::
 
@@ -17,14 +17,14 @@ Exit code 0 when saving at the figures' own size is faster than the baseline, 1 
 
 from __future__ import annotations
 
-import argparse
-import statistics
 import sys
 import tempfile
-import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import matplotlib.pyplot as plt
+from benchmark_timing import alternating_medians_s, repeats_and_json_options
 from matplotlib.figure import Figure
 
 from ornitail.acquisition.rig import Rig
@@ -59,24 +59,20 @@ def save_with_tight_box(figure: Figure, path_without_suffix: Path) -> list[Path]
     return paths
 
 
-def median_processing_s(runs: list[Path], repeats: int) -> float:
-    """Median wall time of processing ``runs`` into a fresh folder, s."""
-    times = []
-    for _ in range(repeats):
-        with tempfile.TemporaryDirectory(prefix="processing-figures-") as out:
-            started = time.perf_counter()
-            process_module.process_runs(runs, Path(out))
-            times.append(time.perf_counter() - started)
-    return statistics.median(times)
+@contextmanager
+def tight_box_saving() -> Iterator[None]:
+    """Processing as it saved its figures before (the baseline)."""
+    saved = process_module.save_figure
+    process_module.save_figure = save_with_tight_box
+    try:
+        yield
+    finally:
+        process_module.save_figure = saved
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--json", action="store_true")
-    arguments = parser.parse_args(argv)
-    if arguments.repeats < 1:
-        print("processing_figures: --repeats must be >= 1", file=sys.stderr)
+    arguments = repeats_and_json_options("processing_figures", __doc__.splitlines()[0], argv)
+    if arguments is None:
         return 2
     with tempfile.TemporaryDirectory(prefix="processing-figures-data-") as data:
         with Rig.from_file(time_scale=TIME_SCALE) as rig:
@@ -85,14 +81,15 @@ def main(argv: list[str] | None = None) -> int:
             print(f"processing_figures: the sweep ended {result.status}", file=sys.stderr)
             return 1
         runs = list(result.run_directories)
-        median_processing_s(runs, 1)  # imports and font caches warm
-        own_size_s = median_processing_s(runs, arguments.repeats)
-        saved = process_module.save_figure
-        process_module.save_figure = save_with_tight_box
-        try:
-            tight_box_s = median_processing_s(runs, arguments.repeats)
-        finally:
-            process_module.save_figure = saved
+
+        def process() -> None:
+            with tempfile.TemporaryDirectory(prefix="processing-figures-") as out:
+                process_module.process_runs(runs, Path(out))
+
+        process()  # imports and font caches warm
+        own_size_s, tight_box_s = alternating_medians_s(
+            process, tight_box_saving, arguments.repeats
+        )
     record = {
         "repeats": arguments.repeats,
         "processing_own_size_s": own_size_s,
