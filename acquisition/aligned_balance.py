@@ -53,6 +53,9 @@ from ornitail.acquisition.serial_daq_driver import SerialDaqDriver
 MAX_POLL_GAP_PERIODS = 3.0
 """Rows between two balance samples further apart than this many of the balance's periods are lost (a missed reply,
 a stalled poller, lost records)."""
+MAX_BLOCKS_PER_READ = 64
+"""At most this many blocks of each device are merged per :meth:`AlignedBalance.read_block` call, so one call stays
+short however far the reader fell behind (a few seconds of blocks at the drivers' block periods)."""
 AUX_COLUMNS = slice(6, 9)
 """Hot-wire bridge, thermocouple, Hall line: the auxiliary board's columns the stream takes."""
 
@@ -185,13 +188,24 @@ class AlignedBalance(BalanceStream):
         )
 
     def read_block(self, timeout_s: float) -> BalanceBlock | None:
-        """The grid rows both devices now cover (None when none after ``timeout_s``)."""
+        """The grid rows both devices now cover (None when none after ``timeout_s``).
+
+        Every balance block and auxiliary block waiting is taken (up to ``MAX_BLOCKS_PER_READ`` of each), each pile
+        grown by one concatenation: a reader that took one balance block per call while stacking every auxiliary
+        block onto its pile fell behind for good once the host was busy (the pile it re-copied grew with the lag).
+        """
         self._take_aux_blocks()
+        taken = []
         gauges = self.balance.read_timed_gauges(timeout_s)
-        if gauges is not None:
-            self._poll_times = np.concatenate((self._poll_times, gauges.sample_time_s))
-            self._poll_volts = np.vstack((self._poll_volts, gauges.volts))
-            self._poll_flags = np.concatenate((self._poll_flags, gauges.flagged))
+        while gauges is not None:
+            taken.append(gauges)
+            if len(taken) >= MAX_BLOCKS_PER_READ:
+                break
+            gauges = self.balance.read_timed_gauges(0.0)
+        if taken:
+            self._poll_times = np.concatenate([self._poll_times, *(g.sample_time_s for g in taken)])
+            self._poll_volts = np.vstack([self._poll_volts, *(g.volts for g in taken)])
+            self._poll_flags = np.concatenate([self._poll_flags, *(g.flagged for g in taken)])
         self._take_aux_blocks()
         return self._emit()
 
@@ -236,23 +250,29 @@ class AlignedBalance(BalanceStream):
 
     # -- merging ----------------------------------------------------------------------------
     def _take_aux_blocks(self) -> None:
-        while True:
-            try:
-                block = self.aux.blocks.get_nowait()
-            except queue.Empty:
-                return
-            if block is None:
-                self.aux.raise_if_failed()
-                return
-            counters = self._aux_unwrapper.unwrap(block.counters)
-            self._aux_counters = np.concatenate((self._aux_counters, counters))
-            self._aux_volts = np.vstack((self._aux_volts, block.volts[:, AUX_COLUMNS]))
-            # a clipped hot-wire or thermocouple (the board's status bit also covers its unused gauge inputs)
-            low, high = self.aux.adc_limits_v()
-            analog = block.volts[:, 6:8]
-            flags = ((analog <= low[6:8]) | (analog >= high[6:8])).any(axis=1)
-            self._aux_flags = np.concatenate((self._aux_flags, flags))
-            self._model.add(int(counters[-1]), block.host_time_s)
+        counters_taken, volts_taken, flags_taken = [], [], []
+        low, high = self.aux.adc_limits_v()
+        try:
+            while len(counters_taken) < MAX_BLOCKS_PER_READ:
+                try:
+                    block = self.aux.blocks.get_nowait()
+                except queue.Empty:
+                    return
+                if block is None:
+                    self.aux.raise_if_failed()
+                    return
+                counters = self._aux_unwrapper.unwrap(block.counters)
+                counters_taken.append(counters)
+                volts_taken.append(block.volts[:, AUX_COLUMNS])
+                # a clipped hot-wire or thermocouple (the board's status bit also covers its unused gauge inputs)
+                analog = block.volts[:, 6:8]
+                flags_taken.append(((analog <= low[6:8]) | (analog >= high[6:8])).any(axis=1))
+                self._model.add(int(counters[-1]), block.host_time_s)
+        finally:
+            if counters_taken:
+                self._aux_counters = np.concatenate([self._aux_counters, *counters_taken])
+                self._aux_volts = np.vstack([self._aux_volts, *volts_taken])
+                self._aux_flags = np.concatenate([self._aux_flags, *flags_taken])
 
     def _emit(self) -> BalanceBlock | None:
         fit = self._model.fit()

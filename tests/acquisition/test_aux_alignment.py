@@ -174,6 +174,41 @@ def test_aligned_stream_matches_the_simulated_boards_true_sample_times(tmp_path,
     assert values["aux_clock_points"] > 10 and values["alignment_error_estimate_s"] > 0
 
 
+def test_a_reader_that_fell_behind_catches_up_in_a_few_calls(tmp_path):
+    """A busy host once left the live balance's reader seconds behind the Net F/T, and it never caught up: each call
+    took one balance block and re-copied a pile of auxiliary rows that grew with the lag (a livelock). After a 2 s
+    backlog (about 200 balance blocks of 10 ms, 1000 records/s), reading must reach the present within a handful of
+    calls: every waiting block of both devices is merged per call (up to MAX_BLOCKS_PER_READ). One block per call
+    would need about 200 calls; 4 * ceil(200 / 64) + 4 = 20 allows each call to cover less than half of what it can
+    while the devices keep streaming."""
+    from ornitail.acquisition.aligned_balance import MAX_BLOCKS_PER_READ
+
+    path = rig_copy(tmp_path, NETFT_AUX_RIG, {})
+    with Rig.from_file(path, time_scale=1.0) as rig:
+        balance = rig.balance
+        rig.set_flapping_frequency(12.0)
+        rig.start_balance()
+        rate_hz = rig.description.balance_sample_rate_hz()
+        deadline = time.monotonic() + DEADLINE_S
+        while balance.read_block(timeout_s=0.5) is None:  # both devices streaming
+            assert time.monotonic() < deadline, "rows did not arrive"
+        behind_s = 2.0
+        rig.wait_simulated_s(behind_s)  # the reader is starved
+        calls_allowed = 4 * math.ceil(behind_s / 0.01 / MAX_BLOCKS_PER_READ) + 4
+        lag_s = []
+        for _ in range(calls_allowed):
+            block = balance.read_block(timeout_s=0.5)
+            if block is not None:
+                lag_s.append(balance._clock() - (balance._t0 + float(block.counters[-1]) / rate_hz))
+                if lag_s[-1] < 0.5:
+                    break
+        rig.stop_balance()
+    # Rows reach the device's data within half a second: the UDP and serial transports' floor plus a block period.
+    assert lag_s and lag_s[-1] < 0.5, (
+        f"still {lag_s[-1] if lag_s else 'inf'} s behind after {calls_allowed} calls"
+    )
+
+
 @pytest.mark.parametrize(
     ("source", "key"), [(CAN_AUX_RIG, "[balance.can]"), (NETFT_AUX_RIG, "[balance.netft]")]
 )
