@@ -57,7 +57,7 @@ _SAME_UNIT_QUALIFIERS = frozenset(
         "tare",
         "before",
         "after",
-        "third",
+        "terms",
         "cycle",
         "tailed",
         "tailless",
@@ -70,7 +70,7 @@ def unit_from_column_name(name: str) -> str | None:
     """The unit a column's name says, e.g. ``"N m"`` for ``m_n_m_se``, ``"m/s"`` for ``v_measured_m_s``.
 
     The name's last tokens (split at ``_``) are read after dropping qualifiers that keep the unit (``2sigma``,
-    ``se``, ``sigma``, ``std``, ``mean``, ``tare``, ``before``, ``after``, ``third``, ``cycle``, ``tailed``,
+    ``se``, ``sigma``, ``std``, ``mean``, ``tare``, ``before``, ``after``, ``terms``, ``cycle``, ``tailed``,
     ``tailless``); a unit suffix must follow at least one token naming the quantity. ``None`` when the name
     carries no unit: a count, a flag, text, a ratio (``x_n_repeat_inflation_tailed``), or a quantity whose unit
     the name does not say (``Xu`` of the campaign table): dimensionless or not known from the name.

@@ -1,11 +1,9 @@
 """The covariance of a set of tunnel points' loads: their own cycle scatter and the errors they share.
 
 A point's load is its cycle mean minus a zero. Its own error (``<load>_se``, cycle scatter) is independent of every
-other point's. The zero is a weighted sum of wind-off tares (the tare before with ``1 - lambda``, the bracketing
-tare after with ``lambda``; ``balance.tare_drift``), so points corrected with the same tare share that tare's
-error in proportion to their weights on it; when a run's drift bends, a third tare joins the zero with its own
-weight (:class:`ornitail.balance.tare_drift.DriftCheck`). Used by the derivative fit and by the pooling of
-repeats for the tail's contribution.
+other point's. The zero is a weighted sum of its run's wind-off tares (``tare_terms``: ``<tare id>=<weight>``;
+``balance.run_drift_fit``), so points whose zeros use the same tare share that tare's error in proportion to their
+weights on it. Used by the derivative fit and by the pooling of repeats for the tail's contribution.
 """
 
 from __future__ import annotations
@@ -14,59 +12,40 @@ import numpy as np
 import pandas as pd
 
 
-def weighted_tare_covariance(
-    standard_errors: np.ndarray, shared_terms: list[tuple[np.ndarray, np.ndarray]]
-) -> np.ndarray:
-    """Covariance of points whose own errors are ``standard_errors`` and who share errors ``shared_terms``.
-
-    ``shared_terms`` holds, per shared error source (the tare before, the tare after, a third tare), each point's
-    source id and the error it takes from that source (``w * se`` for a tare: point i's zero = sum of
-    w_ik * tare k). Sources are independent, so ``cov_ij = se_i^2 delta_ij + sum_k e_ik e_jk`` over the sources k
-    both points share.
-    """
-    covariance = np.diag(np.asarray(standard_errors, dtype=float) ** 2)
-    for ids_a, weighted_a in shared_terms:
-        for ids_b, weighted_b in shared_terms:
-            same = np.asarray(ids_a)[:, None] == np.asarray(ids_b)[None, :]
-            covariance = covariance + same * np.outer(weighted_a, weighted_b)
-    return covariance
-
-
-def shared_error_terms(points: pd.DataFrame, column: str) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The tares ``column``'s points share: the tare before, after and third when the table has them (weighted),
-    else one tare each."""
-    if "tare_after_weight" not in points or f"{column}_tare_before_se" not in points:
-        ids = points["tare_id"].to_numpy() if "tare_id" in points else np.arange(len(points))
-        return [(ids, points[f"{column}_tare_se"].to_numpy(dtype=float))]
-    after_weight = points["tare_after_weight"].to_numpy(dtype=float)
-    third_weight = (
-        points["tare_third_weight"].to_numpy(dtype=float)
-        if "tare_third_weight" in points
-        else np.zeros(len(points))
-    )
-    terms = [
-        (
-            points["tare_id"].to_numpy(),
-            points[f"{column}_tare_before_se"].to_numpy(dtype=float)
-            * (1.0 - after_weight - third_weight),
-        ),
-        (
-            points["tare_after_id"].fillna("").astype(str).to_numpy(),
-            points[f"{column}_tare_after_se"].to_numpy(dtype=float) * after_weight,
-        ),
-    ]
-    if "tare_third_id" in points:
-        terms.append(
-            (
-                points["tare_third_id"].fillna("").astype(str).to_numpy(),
-                points[f"{column}_tare_third_se"].to_numpy(dtype=float) * third_weight,
-            )
+def shared_tare_errors(points: pd.DataFrame, column: str) -> np.ndarray:
+    """(points, tares) matrix of the error each point's ``column`` takes from each tare: ``w_ik se_k`` (point i's
+    zero = sum of w_ik * tare k). Tables without ``tare_terms`` hold one tare per point (``tare_id``, weight 1,
+    ``<column>_tare_se``)."""
+    if "tare_terms" not in points:
+        ids = (
+            points["tare_id"].astype(str).to_numpy()
+            if "tare_id" in points
+            else np.arange(len(points))
         )
-    return terms
+        unique, columns = np.unique(ids, return_inverse=True)
+        errors = np.zeros((len(points), len(unique)))
+        errors[np.arange(len(points)), columns] = points[f"{column}_tare_se"].to_numpy(dtype=float)
+        return errors
+    rows = []
+    for terms, standard_errors in zip(
+        points["tare_terms"].astype(str), points[f"{column}_tare_terms_se"].astype(str), strict=True
+    ):
+        pairs = [term.rsplit("=", 1) for term in terms.split(";") if term]
+        ses = [float(value) for value in standard_errors.split(";") if value]
+        rows.append(
+            {tare_id: float(weight) * se for (tare_id, weight), se in zip(pairs, ses, strict=True)}
+        )
+    tare_ids = sorted({tare_id for row in rows for tare_id in row})
+    index = {tare_id: k for k, tare_id in enumerate(tare_ids)}
+    errors = np.zeros((len(points), len(tare_ids)))
+    for i, row in enumerate(rows):
+        for tare_id, error in row.items():
+            errors[i, index[tare_id]] = error
+    return errors
 
 
 def point_covariance(points: pd.DataFrame, column: str) -> np.ndarray:
-    """Covariance (unit of ``column`` squared) of ``column`` over the rows of ``points``."""
-    return weighted_tare_covariance(
-        points[f"{column}_se"].to_numpy(dtype=float), shared_error_terms(points, column)
-    )
+    """Covariance (unit of ``column`` squared) of ``column`` over the rows of ``points``: ``diag(se^2) + E E^T``
+    with ``E`` the errors the points take from their tares (:func:`shared_tare_errors`; tares independent)."""
+    shared = shared_tare_errors(points, column)
+    return np.diag(points[f"{column}_se"].to_numpy(dtype=float) ** 2) + shared @ shared.T

@@ -42,15 +42,13 @@ from ornitail.balance.point_loads import (
     propagated_standard_error,
     tare_volts_and_covariance,
 )
+from ornitail.balance.run_drift_fit import RunDriftFit, fit_run_drift, zero_correction
 from ornitail.balance.tare_drift import (
-    DriftCheck,
     RecordedTare,
     RunningClock,
     TareCorrection,
-    drift_check,
     middle_sample_index,
     running_clock_of,
-    tare_correction,
 )
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.calibration.flapping_frequency_check import (
@@ -134,48 +132,16 @@ class MeasuredSetPoint:
     tare_id: str
     flags: dict[str, int] = field(default_factory=dict)
     tare: TareCorrection | None = None
-    drift_check: DriftCheck | None = None
+    drift_fit: RunDriftFit | None = None
     calibration_file: ResolvedCalibrationFile | None = None
 
     def tare_columns(self) -> dict[str, float | str]:
-        """``tare_after_id``, ``tare_after_weight``, ``drift_model`` and, per body load, the standard error of
-        the tare before and of the tare after (N, N m; unweighted, 0 without a tare after)."""
-        correction = self.tare
-        columns: dict[str, float | str] = {
-            "tare_after_id": ""
-            if correction is None or correction.after is None
-            else correction.after.tare_id,
-            "tare_after_weight": 0.0 if correction is None else correction.after_weight,
-            "tare_third_id": ""
-            if correction is None or correction.third is None
-            else correction.third.tare_id,
-            "tare_third_weight": 0.0 if correction is None else correction.third_weight,
-            "drift_model": "" if correction is None else correction.drift_model,
-        }
-        before = propagated_standard_error(
-            self.calibration,
-            self.tare_volts_covariance
-            if correction is None
-            else correction.before.volts_covariance,
+        """The point's zero in table columns (:func:`tare_term_columns`)."""
+        correction = self.tare or TareCorrection(
+            RecordedTare(self.tare_id, "", 0.0, self.tare_volts, self.tare_volts_covariance),
+            (),
         )
-        after = propagated_standard_error(
-            self.calibration,
-            None
-            if correction is None or correction.after is None
-            else correction.after.volts_covariance,
-        )
-        third = propagated_standard_error(
-            self.calibration,
-            None
-            if correction is None or correction.third is None
-            else correction.third.volts_covariance,
-        )
-        for index, name in enumerate(BODY_LOAD_NAMES):
-            columns[f"{name}_tare_before_se"] = float(before[index])
-            columns[f"{name}_tare_after_se"] = float(after[index])
-            columns[f"{name}_tare_third_se"] = float(third[index])
-        columns["drift_check"] = "" if self.drift_check is None else self.drift_check.statement()
-        return columns
+        return tare_term_columns(correction, self.calibration, self.drift_fit)
 
     def gauge_and_hall_volts(self) -> tuple[np.ndarray, np.ndarray]:
         """Raw gauge voltages (n, 6) and Hall line (n,) of the point, V; a record with lost samples is refused
@@ -298,6 +264,30 @@ def _tare_record(tare: RecordedTare) -> SetPointRecord:
     return tare.record
 
 
+def tare_term_columns(
+    correction: TareCorrection, calibration: AtiCalibration, drift_fit: RunDriftFit | None
+) -> dict[str, float | str]:
+    """``tare_terms`` (``<tare id>=<weight>`` of every tare in the zero, ``;``-separated; the tare before with
+    weight 1 when there are no terms), ``drift_model``, ``drift_check`` (the run's drift fit statement) and, per body
+    load, ``<load>_tare_terms_se``: the standard error of each of those tares alone (inflated as the zero's), in the
+    same order (N, N m; for the covariance of points sharing one)."""
+    terms = correction.terms or ((correction.before, 1.0),)
+    errors = [
+        propagated_standard_error(
+            calibration, correction.covariance_inflation * tare.volts_covariance
+        )
+        for tare, _ in terms
+    ]
+    columns: dict[str, float | str] = {
+        "tare_terms": ";".join(f"{tare.tare_id}={weight:.12g}" for tare, weight in terms),
+        "drift_model": correction.drift_model if correction.terms else "",
+    }
+    for index, name in enumerate(BODY_LOAD_NAMES):
+        columns[f"{name}_tare_terms_se"] = ";".join(f"{float(se[index]):.9g}" for se in errors)
+    columns["drift_check"] = "" if drift_fit is None else drift_fit.statement()
+    return columns
+
+
 def _recorded_tare(point: _RecordedPoint, clock: RunningClock) -> RecordedTare:
     frame = point.recording.set_point_frame(int(point.row["set_point_index"]))
     volts, volts_covariance = tare_volts_and_covariance(
@@ -313,42 +303,14 @@ def _recorded_tare(point: _RecordedPoint, clock: RunningClock) -> RecordedTare:
     )
 
 
-def _next_tare_in_run(
-    points: list[_RecordedPoint], position: int, key: tuple[bool, float]
-) -> int | None:
-    """The position of the first tare with ``key`` after ``points[position]`` in the same run, or None."""
-    run_id = points[position].recording.run_id
-    for later_position in range(position + 1, len(points)):
-        later = points[later_position]
-        if later.recording.run_id != run_id:
-            return None
-        if later.row["kind"] == "tare" and _tare_key(later) == key:
-            return later_position
-    return None
-
-
-def _tares_by_run_and_pitch(
+def _keyed_tares_by_run(
     points: list[_RecordedPoint], recorded_tares: dict[int, RecordedTare]
-) -> dict[str, dict[tuple[bool, float], list[RecordedTare]]]:
-    """Each run's tares grouped by tail state and pitch, in recording order."""
-    grouped: dict[str, dict[tuple[bool, float], list[RecordedTare]]] = {}
+) -> dict[str, list[tuple[tuple[bool, float], RecordedTare]]]:
+    """Each run's tares with their tail state and pitch, in recording order."""
+    grouped: dict[str, list[tuple[tuple[bool, float], RecordedTare]]] = {}
     for position, tare in sorted(recorded_tares.items()):
-        grouped.setdefault(tare.run_id, {}).setdefault(_tare_key(points[position]), []).append(tare)
+        grouped.setdefault(tare.run_id, []).append((_tare_key(points[position]), tare))
     return grouped
-
-
-def third_tare(
-    tares: list[RecordedTare], before: RecordedTare, after: RecordedTare
-) -> RecordedTare | None:
-    """The tare next to the bracketing pair among ``tares`` (one pitch of one run, in order): the one after
-    ``after``, else the one before ``before``; None when the pitch has only the two."""
-    ids = [tare.tare_id for tare in tares]
-    if after.tare_id not in ids or before.tare_id not in ids:
-        return None
-    later, earlier = ids.index(after.tare_id) + 1, ids.index(before.tare_id) - 1
-    if later < len(tares):
-        return tares[later]
-    return tares[earlier] if earlier >= 0 else None
 
 
 def measured_set_points(
@@ -390,9 +352,9 @@ def measured_set_points(
         for position, point in enumerate(points)
         if point.row["kind"] == "tare"
     }
-    grouped = _tares_by_run_and_pitch(points, recorded_tares)
-    checks = {
-        run_id: drift_check(run_id, list(by_pitch.values())) for run_id, by_pitch in grouped.items()
+    fits = {
+        run_id: fit_run_drift(run_id, keyed)
+        for run_id, keyed in _keyed_tares_by_run(points, recorded_tares).items()
     }
     tares: dict[
         tuple[str, tuple[bool, float]], RecordedTare
@@ -404,7 +366,6 @@ def measured_set_points(
         if point.record.is_flagged and not keep_saturated:
             _refuse_flagged(point)
         run_id = point.recording.run_id
-        clock = clocks[run_id]
         if row["kind"] == "tare":
             tares[run_id, key] = recorded_tares[position]
             continue
@@ -417,17 +378,12 @@ def measured_set_points(
                 "run zeroes another stream, taken minutes or hours apart: the balance's drift since would be in "
                 "the loads); record it again with its tare (a resumed sweep records them)",
             )
-        after_position = _next_tare_in_run(points, position, key)
-        after = None if after_position is None else recorded_tares[after_position]
         if run_id not in calibrations:
             calibrations[run_id] = balance_calibration_of(point.recording, calibration_sources)
         calibration, calibration_file = calibrations[run_id]
-        check = checks.get(run_id)
-        third = None
-        if after is not None and check is not None and check.straight_drift_rejected:
-            third = third_tare(grouped[run_id][key], before, after)
-        correction = tare_correction(
-            before, after, clock.at(middle_sample_index(point.record)), run_id, third
+        fit = fits.get(run_id)
+        correction = zero_correction(
+            fit, key, clocks[run_id].at(middle_sample_index(point.record)), before
         )
         flags = {**_flag_counts(point.record), **_flag_counts(_tare_record(before), "tare_")}
         measured.append(
@@ -440,7 +396,7 @@ def measured_set_points(
                 before.tare_id,
                 flags,
                 correction,
-                check,
+                fit,
                 calibration_file,
             )
         )
@@ -492,8 +448,8 @@ def table_of_points(
 
     Columns: ``run_id``, ``tail_id``, ``x_h_mm``, ``plan_point_index``, ``sweep``, ``tailed``, ``repeat``,
     ``theta_deg``, ``v_m_s``, ``f_set_hz``, ``tare_id`` (``<run id>#<plan point index>`` of the tare before),
-    ``tare_after_id`` and ``tare_after_weight`` (the bracketing tare after the point and its weight lambda in the
-    interpolated zero; ``""`` and 0 without one), ``drift_model`` (how the drift between tares was treated),
+    ``tare_terms`` (``<tare id>=<weight>`` of every tare in the zero, ``;``-separated), ``drift_model`` (how the
+    drift between tares was treated), ``drift_check`` (the run's drift fit),
     ``f_hall_hz``, ``cycles``, ``rejected_cycles``, ``saturated_samples``, ``over_range_samples``,
     ``tare_saturated_samples``, ``tare_over_range_samples`` (rows of the record and of its tare flagged at the
     ADC limit / over the rated load; -1: not checked), the flapping
@@ -501,7 +457,7 @@ def table_of_points(
     motor) and ``f_disagrees`` (beyond 2 %), and for each body load of
     :data:`~ornitail.balance.point_loads.BODY_LOAD_NAMES` its mean, ``_2sigma`` (2 sigma over cycles), ``_se``
     (standard error of the mean over cycles), ``_tare_se`` (standard error of the subtracted zero) and
-    ``_tare_before_se``, ``_tare_after_se`` (of each tare, unweighted: for the covariance of points sharing one).
+    ``_tare_terms_se`` (of each tare of ``tare_terms``, unweighted: for the covariance of points sharing one).
     Loads are in N and N m, body frame, about the rig's reference point.
 
     ``on_point(done, total)`` is called after each point (progress display).

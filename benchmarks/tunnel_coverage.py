@@ -4,7 +4,7 @@ A simulated sweep here is one continuous :class:`TunnelSignalSource` visiting th
 plan's order (wind-off tare at each pitch, then that pitch's measurements, then, with ``bracketing_tares``, a second
 tare), so effects that accumulate over a sweep (the balance warming while the motor runs) accumulate as on the
 rig. Each record goes through the same functions as ``ornitail process`` (:func:`tare_volts_and_covariance`,
-:func:`tare_correction`, :func:`cycle_averaged_loads`, then :func:`tail_contribution` and
+:func:`fit_run_drift`, :func:`zero_correction`, :func:`cycle_averaged_loads`, then :func:`tail_contribution` and
 :func:`fit_stability_derivatives`), the stream's sample count being the run's clock; no real-time rig, so a sweep
 takes a few seconds. Between set points the source runs ``settle_s`` of rig time (the motor running, the balance
 warming), as the rig's settling does. The tests of ``tests/balance`` use the same sweeps (loaded from this file).
@@ -31,14 +31,10 @@ import numpy as np
 import pandas as pd
 
 from ornitail.acquisition.sweep_plan import SweepPlan, load_plan, plan_from_document
-from ornitail.balance.point_loads import (
-    BODY_LOAD_NAMES,
-    cycle_averaged_loads,
-    propagated_standard_error,
-    tare_volts_and_covariance,
-)
-from ornitail.balance.sweep_table import third_tare
-from ornitail.balance.tare_drift import RecordedTare, RunningClock, drift_check, tare_correction
+from ornitail.balance.point_loads import cycle_averaged_loads, tare_volts_and_covariance
+from ornitail.balance.run_drift_fit import fit_run_drift, zero_correction
+from ornitail.balance.sweep_table import tare_term_columns
+from ornitail.balance.tare_drift import RecordedTare, RunningClock
 from ornitail.calibration.ati_calibration import AtiCalibration
 from ornitail.calibration.tool_transform import ToolTransform
 from ornitail.sim.configuration import study_configuration
@@ -121,39 +117,24 @@ class SimulatedSweep:
             for (point, block, middle), run_id in zip(records, run_ids, strict=True)
             if point.kind == "tare"
         ]
-        by_run_and_pitch: dict[str, dict[tuple[bool, float], list[RecordedTare]]] = {}
+        keyed_by_run: dict[str, list[tuple[tuple[bool, float], RecordedTare]]] = {}
         for tare_point, tare in tares:
-            by_run_and_pitch.setdefault(tare.run_id, {}).setdefault(
-                (tare_point.tail_attached, tare_point.pitch_rad), []
-            ).append(tare)
-        checks = {
-            run_id: drift_check(run_id, list(by_pitch.values()))
-            for run_id, by_pitch in by_run_and_pitch.items()
-        }
+            keyed_by_run.setdefault(tare.run_id, []).append(
+                ((tare_point.tail_attached, tare_point.pitch_rad), tare)
+            )
+        fits = {run_id: fit_run_drift(run_id, keyed) for run_id, keyed in keyed_by_run.items()}
         rows = []
         for (point, block, middle), run_id in zip(records, run_ids, strict=True):
             if point.kind == "tare":
                 continue
             key = (point.tail_attached, point.pitch_rad)
-            same = [
-                (tare_point, tare)
+            before = [
+                tare
                 for tare_point, tare in tares
                 if (tare_point.tail_attached, tare_point.pitch_rad) == key
-            ]
-            before = [tare for tare_point, tare in same if tare_point.index < point.index][-1]
-            after = next(
-                (
-                    tare
-                    for tare_point, tare in same
-                    if tare_point.index > point.index and tare.run_id == run_id
-                ),
-                None,
-            )
-            third = None
-            if after is not None and checks[run_id].straight_drift_rejected:
-                third = third_tare(by_run_and_pitch[run_id][key], before, after)
-            running_time = clocks[run_id].at(middle)
-            correction = tare_correction(before, after, running_time, run_id, third)
+                and tare_point.index < point.index
+            ][-1]
+            correction = zero_correction(fits.get(run_id), key, clocks[run_id].at(middle), before)
             loads = cycle_averaged_loads(
                 block[:, :6],
                 block[:, 8],
@@ -161,13 +142,6 @@ class SimulatedSweep:
                 correction.volts,
                 self.calibration,
                 tare_volts_covariance=correction.volts_covariance,
-            )
-            before_se = propagated_standard_error(self.calibration, before.volts_covariance)
-            after_se = propagated_standard_error(
-                self.calibration, None if after is None else after.volts_covariance
-            )
-            third_se = propagated_standard_error(
-                self.calibration, None if third is None else third.volts_covariance
             )
             rows.append(
                 {
@@ -181,24 +155,8 @@ class SimulatedSweep:
                     "v_m_s": point.tunnel_velocity_m_s,
                     "f_set_hz": point.flapping_frequency_hz,
                     "tare_id": before.tare_id,
-                    "tare_after_id": "" if after is None else after.tare_id,
-                    "tare_after_weight": correction.after_weight,
                     **loads.as_record(),
-                    **{
-                        f"{name}_tare_before_se": before_se[index]
-                        for index, name in enumerate(BODY_LOAD_NAMES)
-                    },
-                    **{
-                        f"{name}_tare_after_se": after_se[index]
-                        for index, name in enumerate(BODY_LOAD_NAMES)
-                    },
-                    "tare_third_id": "" if third is None else third.tare_id,
-                    "tare_third_weight": correction.third_weight,
-                    **{
-                        f"{name}_tare_third_se": third_se[index]
-                        for index, name in enumerate(BODY_LOAD_NAMES)
-                    },
-                    "drift_check": checks[run_id].statement(),
+                    **tare_term_columns(correction, self.calibration, fits.get(run_id)),
                 }
             )
         return pd.DataFrame(rows)

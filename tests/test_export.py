@@ -32,7 +32,7 @@ CALIBRATION_FILE = Path(__file__).parent / "data" / "calibration" / "FT8884.cal"
     [
         ("x_n", "N"),
         ("m_n_m", "N m"),
-        ("m_n_m_tare_before_se", "N m"),
+        ("m_n_m_tare_terms_se", "N m"),
         ("x_n_2sigma", "N"),
         ("v_measured_m_s_tailed", "m/s"),
         ("theta_deg", "deg"),
@@ -50,7 +50,7 @@ CALIBRATION_FILE = Path(__file__).parent / "data" / "calibration" / "FT8884.cal"
         ("x_n_repeat_inflation_tailed", None),
         ("x_n_resolvable", None),
         ("cycles_tailed", None),
-        ("tare_after_weight", None),
+        ("tare_terms", None),
         ("run_id", None),
         ("s", None),  # a unit alone names no quantity
         ("Xu", None),
@@ -69,7 +69,11 @@ def small_processed_table(path: Path) -> pd.DataFrame:
             "v_m_s": [0.8, 0.8, 0.8],
             "x_n": [0.0741, 0.0752, 0.0677],
             "m_n_m_2sigma": [1.2e-5, 1.3e-5, 1.1e-5],
-            "tare_after_id": ["r1#4", "", ""],  # empty cells, as ornitail process writes them
+            "drift_check": [
+                "Drift fit (r1): 2 tares",
+                "",
+                "",
+            ],  # empty cells, as ornitail process writes them
             "cycles": [26, 27, 25],
         }
     )
@@ -168,7 +172,7 @@ def test_netcdf_export_holds_the_values_and_units_as_attributes(inputs, tmp_path
     with xr.open_dataset(written[0], engine="h5netcdf") as dataset:
         np.testing.assert_array_equal(dataset["x_n"].values, table["x_n"])
         np.testing.assert_array_equal(dataset["tailed"].values, table["tailed"])
-        assert list(dataset["tare_after_id"].values) == ["r1#4", "", ""]
+        assert list(dataset["drift_check"].values) == ["Drift fit (r1): 2 tares", "", ""]
         assert dataset["theta_deg"].attrs["units"] == "deg"
         assert "units" not in dataset["cycles"].attrs
     with xr.open_dataset(written[1], engine="h5netcdf", group="samples") as samples:
