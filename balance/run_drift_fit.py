@@ -26,6 +26,7 @@ by the reduced chi-square, and the statement says so.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
 
@@ -177,20 +178,10 @@ def fit_run_drift(
     if chosen is None:
         return None
     # No degree agreed with the tares' noise: keep the highest, its tares' errors inflated (Birge ratio).
-    inflation = max(1.0, chosen.chi_square / chosen.degrees_of_freedom)
-    return RunDriftFit(
-        run_id,
-        tares,
-        keys,
-        chosen.degree,
-        chosen.chi_square,
-        chosen.degrees_of_freedom,
-        chosen.p_value,
-        inflation,
-        tuple(rejected[:-1]),
-        offset_keys,
-        span,
-        chosen._solution,
+    return dataclasses.replace(
+        chosen,
+        covariance_inflation=max(1.0, chosen.chi_square / chosen.degrees_of_freedom),
+        rejected_degrees=tuple(rejected[:-1]),
     )
 
 
