@@ -21,9 +21,8 @@ remove the chord bias. ``max_sweep_order=1`` gives the plain straight-line fit.
 
 Weights: the points' covariance is the cycle scatter of each point (``se**2`` on the diagonal) plus the noise of
 each wind-off tare, shared by every point corrected with that tare (``tare_se**2`` between them; with bracketing
-tares a point's zero is ``(1 - lambda)`` times the tare before plus ``lambda`` times the tare after, and two points
-share each tare's error in proportion to their weights on it; and the drift's bend when the tares show one, see
-:mod:`ornitail.balance.point_covariance`); the fit is
+tares a point's zero is a weighted sum of its run's tares from the run's drift fit, and two points share each
+tare's error in proportion to their weights on it, see :mod:`ornitail.balance.point_covariance`); the fit is
 generalised least squares with that covariance ``C`` (weighted least squares when every point has its own tare).
 Standard errors of the coefficients come from ``(A^T C^-1 A)^-1``; when the reduced chi-square exceeds 1
 (scatter or lack of fit beyond what the point errors explain) they are multiplied by ``sqrt(chi2_red)`` and
