@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Protocol
 
+from ornitail.acquisition.instrument_errors import InstrumentDisconnected
 from ornitail.acquisition.live_balance import LiveBalance
 from ornitail.acquisition.motor_running_log import MotorRunningLog
 from ornitail.acquisition.recorder import Recorder
@@ -25,6 +26,11 @@ POLL_INTERVAL_S = 0.1
 """Rig time between readings while settling."""
 MAX_RETAKES = 3
 """Times a set point's record is taken again when samples were lost inside it."""
+ROWS_STALLED_S = 30.0
+"""Rig time a record waits without one new row before the balance stream counts as failed, s. An unplugged device
+fails its port at once; a board whose firmware hung, or a reader that stopped, keeps the port open and sends
+nothing, and without this a sweep would wait for its rows for ever. Rows arrive every 10 ms or so; a busy host
+delays them by seconds at most."""
 
 
 class RecordingContext(Protocol):
@@ -112,6 +118,7 @@ def take_rows(
     samples_since_start = context.rig.balance_samples_since_start()
     conditions = RecordConditions(samples_since_start, count)
     first = None
+    rows_seen, rows_seen_at_s = recorder.next_sample_index, context.rig.now_s()
     while True:
         conditions.read(context.rig)
         if conditions.motor_rpms:
@@ -120,6 +127,14 @@ def take_rows(
             first = context.stream.first_row_sampled_after(samples_since_start)
         if first is not None and recorder.next_sample_index >= first + count:
             return first, conditions
+        if recorder.next_sample_index != rows_seen:
+            rows_seen, rows_seen_at_s = recorder.next_sample_index, context.rig.now_s()
+        elif context.rig.now_s() - rows_seen_at_s > ROWS_STALLED_S:
+            raise InstrumentDisconnected(
+                context.rig.balance.name,
+                f"no samples arrived for {ROWS_STALLED_S:g} s of rig time while recording a set point (the "
+                "stream's port is open but silent: a hung board or a stalled reader)",
+            )
         context.wait_rig_s(POLL_INTERVAL_S)
 
 

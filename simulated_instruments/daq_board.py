@@ -96,6 +96,7 @@ class SimulatedDaqBoard(SimulatedDevice):
         self._lock = threading.Lock()
         self._faults: deque[tuple[str, int | bytes]] = deque()
         self._unplug_requested = threading.Event()
+        self._frozen = threading.Event()
         # channel -> [samples left (None: until released), counts held]; applied from the next block on
         self._rail_holds: dict[int, list[int | None]] = {}
         # (every n samples taken, drop the first k of them)
@@ -131,6 +132,11 @@ class SimulatedDaqBoard(SimulatedDevice):
     def corrupt_next_crc(self, count: int = 1) -> None:
         """Flip a CRC bit of ``count`` frames of the next block."""
         self._add_fault("crc", int(count))
+
+    def freeze(self) -> None:
+        """The board's firmware hangs: it sends nothing more and answers nothing, while its port stays open (the
+        USB-serial bridge still enumerates, so the driver's port does not fail)."""
+        self._frozen.set()
 
     def unplug(self) -> None:
         """Close the pty master: the driver's port fails as if the USB cable were pulled."""
@@ -189,6 +195,8 @@ class SimulatedDaqBoard(SimulatedDevice):
             incoming = self._pty.read_available(self.block_period_s)
             if incoming is None:
                 return
+            if self._frozen.is_set():
+                continue  # what arrives is lost; nothing goes out
             command_buffer += incoming
             while b"\n" in command_buffer:
                 line, command_buffer = command_buffer.split(b"\n", 1)

@@ -303,6 +303,34 @@ def test_unplugged_balance_fails_the_run_naming_it_and_keeps_what_was_recorded(
     )  # the balance is gone; the fixture's close would report it again
 
 
+def test_a_balance_that_goes_silent_fails_the_run_naming_it_instead_of_waiting_for_ever(
+    simulated_rig, tmp_path, monkeypatch
+):
+    """The board's firmware hangs after two points: its port stays open, nothing more arrives. The next record
+    gives up after ROWS_STALLED_S of rig time without a row (3 s here, 0.15 s of wall time at the fixture's time
+    scale of 20), the run fails naming the balance, keeps what was recorded and leaves the motor spinning down.
+    Without the deadline the sweep waits for its rows until pytest's timeout."""
+    monkeypatch.setattr(set_point_recording, "ROWS_STALLED_S", 3.0)
+    documents, done = counting_documents()
+
+    def on_event(event):
+        if event.stage == "recorded" and done[-1] == 2:
+            simulated_rig.simulators.daq_board.freeze()
+
+    result = run_sweep(
+        short_plan(), simulated_rig, tmp_path, on_event=on_event, documents=documents
+    )
+    assert result.status == "failed"
+    assert simulated_rig.balance.name in result.message and "no samples arrived" in result.message
+    recording = load_recording(result.run_directories[0])
+    assert recording.status == "failed"
+    assert len(recording.set_points_frame()) == 2
+    assert motor_spins_down(simulated_rig)
+    simulated_rig.close(
+        raise_errors=False
+    )  # the board no longer answers; closing it would report that again
+
+
 def test_records_longer_than_the_remembered_blocks_are_checked_whole(
     simulated_rig, tmp_path, monkeypatch
 ):
