@@ -101,6 +101,13 @@ class RunDriftFit:
     def statement(self) -> str:
         """One line for the output: the curve chosen, the check, and any inflation."""
         pitches = len(self._offset_keys)
+        if (
+            len(self.tares) == 2 and pitches == 1
+        ):  # the same words for every such run, said once per output
+            return (
+                "Drift fit (runs with two tares at one pitch): the straight line between them; no spare tare, so "
+                "its shape is not tested."
+            )
         head = (
             f"Drift fit ({self.run_id}): {len(self.tares)} tares at {pitches} pitch(es), one "
             f"{DEGREE_NAMES[self.degree]} in running time shared by all"

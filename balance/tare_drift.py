@@ -189,9 +189,10 @@ def drift_statement(drift_models: list[str], drift_checks: Sequence[str] = ()) -
     total = len(drift_models)
     constant = sum(model == DRIFT_MODEL_CONSTANT for model in drift_models)
     if constant == 0:
-        shapes = sorted(set(drift_models))
-        described = shapes[0] if len(shapes) == 1 else "; ".join(shapes)
-        line = f"Balance drift: the zero of all {total} points taken from their run's drift, {described}."
+        line = (
+            f"Balance drift: the zero of all {total} points from their run's drift fit (one curve in running time "
+            "shared by every pitch of the run, an offset per pitch)."
+        )
     else:
         line = (
             f"Balance drift NOT corrected for {constant} of {total} points: no tare after them in their run, so "

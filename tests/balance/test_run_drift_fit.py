@@ -171,4 +171,7 @@ def test_two_tares_at_one_pitch_are_a_straight_line_between_them():
         np.sqrt(np.diag(correction.volts_covariance)), np.hypot(0.75 * 3e-5, 0.25 * 4e-5)
     )
     assert correction.drift_model == drift_model_name(1)
-    assert "no spare tare, so its shape is not tested" in fit.statement()
+    assert fit.statement() == (
+        "Drift fit (runs with two tares at one pitch): the straight line between them; no spare tare, so its "
+        "shape is not tested."
+    )
