@@ -101,9 +101,8 @@ class RunDriftFit:
     def statement(self) -> str:
         """One line for the output: the curve chosen, the check, and any inflation."""
         pitches = len(self._offset_keys)
-        if (
-            len(self.tares) == 2 and pitches == 1
-        ):  # the same words for every such run, said once per output
+        # The same words for every run of two tares at one pitch, so the output says them once.
+        if len(self.tares) == 2 and pitches == 1:
             return (
                 "Drift fit (runs with two tares at one pitch): the straight line between them; no spare tare, so "
                 "its shape is not tested."

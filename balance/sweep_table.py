@@ -107,8 +107,8 @@ class MeasuredSetPoint:
     row : pandas.Series
         The point's row of :meth:`Recording.set_points_frame` (set values in SI, ``sweep``, ``motor_rpm_mean``).
     tare_volts, tare_volts_covariance : numpy.ndarray
-        Mean gauge voltages of the newest earlier wind-off tare at the same pitch and tail state, shape (6,), V,
-        and their covariance, shape (6, 6), V^2.
+        The gauges' zero subtracted from the point (see ``tare``), shape (6,), V, and its covariance, shape (6, 6),
+        V^2.
     calibration : AtiCalibration
         Balance calibration with the rig's tool transform (body frame at the rig's reference point).
     tare_id : str
@@ -118,8 +118,10 @@ class MeasuredSetPoint:
         and ``tare_over_range_samples`` of its tare's (-1: the recording did not check); non-zero only when
         flagged records were kept (``keep_saturated=True``).
     tare : TareCorrection, optional
-        The tare before the point and, when the plan bracketed it, the tare after it with its weight; then
-        ``tare_volts`` and ``tare_volts_covariance`` are the interpolated zero and its covariance.
+        The point's zero as a weighted sum of its run's tares (from the run's drift fit, or the tare before alone);
+        ``tare_volts`` and ``tare_volts_covariance`` are that zero and its covariance.
+    drift_fit : RunDriftFit, optional
+        The drift fit of the point's run (its statement goes to the ``drift_check`` column).
     calibration_file : ResolvedCalibrationFile, optional
         Where the balance calibration file was found (and the warning of an override with other content).
     """
