@@ -225,6 +225,8 @@ def _render(result: dict[str, Any]) -> str:
                     f"  {name:3s} {entry['value']:+.4g} +- {entry['sigma']:.2g} {entry.get('unit', '')}"
                     + ("" if resolution.startswith("resolved") else f"   ({resolution})")
                 )
+    if result.get("repeatability_statement"):
+        lines.append(result["repeatability_statement"])
     if result.get("truth"):
         lines += _truth_lines(result["truth"])
     if result.get("processed_folder"):
@@ -302,6 +304,7 @@ def demo_command(data_root: Path | None, time_scale: float, as_json: bool) -> No
         result["drift_statement"] = configuration.get("drift_statement", "")
         derivatives = configuration.get("derivatives", {})
         result["derivatives"] = derivatives.get("derivatives", {})
+        result["repeatability_statement"] = derivatives.get("repeatability_statement", "")
         if "tail_contribution" in result and "steady_state" in derivatives:
             result["truth"] = truth_comparison(
                 table,

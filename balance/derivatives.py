@@ -17,16 +17,29 @@ gives the chord, not the derivative at the steady state. When a sweep has k >= 2
 2..min(k, 3) of that sweep's own coordinate are fitted as nuisance terms: ``dV_along**p`` (velocity change along
 the steady-state stream direction) for the velocity sweep, ``dV_across**p`` (across it) for the pitch sweep and
 ``df**p`` for the frequency sweep. With a symmetric sweep the even powers do not move the slopes; the cubes
-remove the chord bias. ``max_sweep_order=1`` gives the plain straight-line fit.
+remove the chord bias. Higher powers (up to ``max_sweep_order``, 4 by default, and the sweep's k) are added one
+at a time, per load, where the lack-of-fit test asks for them: the chi-square falls by more than its 1 % point
+for one degree of freedom (6.63). On the simulator M along the velocity sweep is not cubic at the resolution of
+M; the quartic (even) leaves the slope alone and stops the intercept M0 from taking up the curvature.
+``max_sweep_order=1`` gives the plain straight-line fit.
 
-Weights: the points' covariance is the cycle scatter of each point (``se**2`` on the diagonal) plus the noise of
-each wind-off tare, shared by every point corrected with that tare (``tare_se**2`` between them; with bracketing
-tares a point's zero is a weighted sum of its run's tares from the run's drift fit, and two points share each
-tare's error in proportion to their weights on it, see :mod:`ornitail.balance.point_covariance`); the fit is
-generalised least squares with that covariance ``C`` (weighted least squares when every point has its own tare).
-Standard errors of the coefficients come from ``(A^T C^-1 A)^-1``; when the reduced chi-square exceeds 1
-(scatter or lack of fit beyond what the point errors explain) they are multiplied by ``sqrt(chi2_red)`` and
-the fit says so.
+Weights: the points' covariance is the cycle scatter of each point (``se**2`` on the diagonal, pooled over the
+records of a run at one flapping frequency: one record's estimate is rough, see
+:mod:`ornitail.balance.point_covariance`) plus the noise of each wind-off tare, shared by every point corrected
+with that tare (with bracketing tares a point's zero is a weighted sum of its run's tares from the run's drift
+fit, and two points share each tare's error in proportion to their weights on it); the fit is generalised least
+squares with that covariance ``C``.
+
+Repeatability: records scatter more than their cycle scatter and tares say (slow flow unsteadiness, drift the
+model does not follow: on the simulated rig about 1.2 of their sigmas). That record-to-record variance ``s**2``
+(per load, the same for every record) is measured where the data can tell it from lack of fit: on the fit in
+which every sweep has all the powers its offsets allow, whose residual degrees of freedom are the repeats (the
+steady state and the returns to it) and the sweeps' spare offsets. ``s**2`` is the Paule-Mandel value, the one
+that brings that fit's chi-square with ``C + s**2 I`` to its degrees of freedom (0 when it is already below).
+Every fit of the load then uses ``C + s**2 I``, so the sigmas of each coefficient grow by what its own points'
+repeatability adds, not by one factor for all. Should the chosen model still disagree with its points (chi-square
+rejected at p = 0.01), all its sigmas are multiplied by ``sqrt(chi2_red)`` and the fit says so. With no repeats
+and no spare offsets there is nothing to measure ``s`` on; the fit says so and uses ``C`` alone.
 
 The clamped set-up holds pitch fixed during a record, so the pitch-rate derivatives Xq, Zq, Mq cannot be
 measured in it; the result states this.
@@ -40,6 +53,8 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from scipy.optimize import brentq
+from scipy.stats import chi2
 
 from ornitail.balance.point_covariance import point_covariance
 from ornitail.core.errors import UserInputError
@@ -61,6 +76,11 @@ FRAME_STATEMENT = (
 REFERENCE_POINT_STATEMENT = (
     "the rig's tool-transform point (rig file [balance].tool_transform_mm_deg)"
 )
+BASE_SWEEP_ORDER = 3
+"""Highest power of a sweep's coordinate always fitted (where the sweep has that many offsets)."""
+LACK_OF_FIT_SIGNIFICANCE = 0.01
+"""A higher power along a sweep is added, and a final fit's sigmas inflated, when the chi-square test rejects at
+this p-value."""
 _VARIABLE_COLUMNS = {"u": "du_m_s", "w": "dw_m_s", "f": "df_hz"}
 _SWEEP_COORDINATES = {"velocity": "dV_along", "theta": "dV_across", "frequency": "df_hz"}
 
@@ -106,14 +126,19 @@ class LoadFitDiagnostics:
     residuals : numpy.ndarray
         Measured minus fitted load per point (N or N m).
     normalised_residuals : numpy.ndarray
-        Residuals divided by the point's standard error.
+        Residuals divided by the point's standard error (cycle scatter, tares and ``record_scatter``).
     leverage : numpy.ndarray
         Diagonal of the weighted hat matrix per point (0..1; sums to the number of coefficients).
     chi_square, degrees_of_freedom, reduced_chi_square : float, int, float
-        Weighted residual sum of squares, points minus coefficients, and their ratio (NaN without
-        degrees of freedom).
+        Residual sum of squares weighted by the points' own covariance ``C`` (without the record-to-record
+        variance), points minus coefficients, and their ratio (NaN without degrees of freedom).
+    record_scatter : float
+        Record-to-record standard deviation ``s`` added to every point (unit of the load, N or N m; 0 when the
+        repeats agree with their errors, NaN when nothing could measure it).
+    repeatability_degrees_of_freedom : int
+        Residual degrees of freedom of the fit ``s`` was measured on (repeats and spare sweep offsets).
     standard_error_inflation : float
-        Factor applied to the standard errors: ``sqrt(reduced_chi_square)`` when that exceeds 1, else 1.
+        ``sqrt(chi2_red)`` of the final fit (with ``C + s**2 I``) when its chi-square test rejects, else 1.
     """
 
     residuals: np.ndarray
@@ -122,6 +147,8 @@ class LoadFitDiagnostics:
     chi_square: float
     degrees_of_freedom: int
     reduced_chi_square: float
+    record_scatter: float
+    repeatability_degrees_of_freedom: int
     standard_error_inflation: float
 
 
@@ -151,8 +178,8 @@ class StabilityDerivatives:
         Condition number of the design's derivative columns (du, dw, df), each scaled to unit length.
     variance_inflation : dict
         Variance inflation factor of each estimable derivative column (1 = orthogonal to the others).
-    nuisance_terms : list of str
-        Curvature terms fitted alongside (e.g. ``"dV_along^2"``).
+    nuisance_terms : dict
+        Curvature terms fitted alongside, by load symbol (e.g. ``{"X": ["dV_along^2", ...]}``).
     variables : list of str
         The estimable variables among ``u``, ``w``, ``f``, in coefficient order.
     coefficients : dict
@@ -170,7 +197,7 @@ class StabilityDerivatives:
     points: pd.DataFrame
     condition_number: float
     variance_inflation: dict[str, float]
-    nuisance_terms: list[str]
+    nuisance_terms: dict[str, list[str]]
     not_estimable: dict[str, str]
     frame: str = FRAME_STATEMENT
     reference_point: str = REFERENCE_POINT_STATEMENT
@@ -201,11 +228,12 @@ class StabilityDerivatives:
             {"theta_deg": theta.ravel(), "v_m_s": speed.ravel(), "f_set_hz": frequency.ravel()}
         )
         coordinates = _sweep_coordinates(points, self.steady_state)
-        design = _design(coordinates, self.variables, [] if linear_only else self.nuisance_terms)
-        return {
-            load: design @ coefficients[: design.shape[1]]
-            for load, coefficients in self.coefficients.items()
-        }
+        predicted = {}
+        for load, coefficients in self.coefficients.items():
+            terms = [] if linear_only else self.nuisance_terms[load]
+            design = _design(coordinates, self.variables, terms)
+            predicted[load] = design @ coefficients[: design.shape[1]]
+        return predicted
 
     def table(self) -> pd.DataFrame:
         """One row per derivative (and steady-state load): value, sigma, unit, fit diagnostics."""
@@ -295,14 +323,19 @@ class StabilityDerivatives:
                 load: {
                     "reduced_chi_square": diagnostics.reduced_chi_square,
                     "degrees_of_freedom": diagnostics.degrees_of_freedom,
+                    f"record_scatter_{unit_key}": diagnostics.record_scatter,
+                    "repeatability_degrees_of_freedom": diagnostics.repeatability_degrees_of_freedom,
                     "sigma_inflation": diagnostics.standard_error_inflation,
                     "max_abs_normalised_residual": float(
                         np.max(np.abs(diagnostics.normalised_residuals))
                     ),
                     "max_leverage": float(np.max(diagnostics.leverage)),
                 }
-                for load, diagnostics in self.diagnostics.items()
+                for (load, diagnostics), unit_key in zip(
+                    self.diagnostics.items(), ("n", "n", "n_m"), strict=True
+                )
             },
+            "repeatability_statement": _repeatability_statement(self),
             "statements": self.statements,
         }
 
@@ -358,14 +391,14 @@ def _sweep_coordinates(
 
 
 def _nuisance_terms(
-    points: pd.DataFrame, coordinates: pd.DataFrame, max_sweep_order: int
+    points: pd.DataFrame, coordinates: pd.DataFrame, lowest_power: int, highest_power: int
 ) -> list[str]:
+    """Powers ``lowest_power..highest_power`` of each sweep's coordinate that its distinct offsets can fix."""
     terms = []
     for sweep, coordinate in _SWEEP_COORDINATES.items():
         offsets = coordinates.loc[points["sweep"] == sweep, coordinate].round(9).unique()
-        terms += [
-            f"{coordinate}^{power}" for power in range(2, min(len(offsets), max_sweep_order) + 1)
-        ]
+        top = min(len(offsets), highest_power)
+        terms += [f"{coordinate}^{power}" for power in range(max(lowest_power, 2), top + 1)]
     return terms
 
 
@@ -412,40 +445,121 @@ def _variance_inflation(design: np.ndarray, names: list[str]) -> dict[str, float
     return dict(zip(names, np.diag(np.linalg.inv(correlation)).tolist(), strict=True))
 
 
-def _weighted_fit(
+def _generalised_least_squares(
     design: np.ndarray, values: np.ndarray, covariance: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, LoadFitDiagnostics]:
-    """Generalised least squares: coefficients, their (inflated) standard errors and diagnostics."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """Coefficients, ``(A^T C^-1 A)^-1``, the whitened design and the chi-square of a GLS fit."""
     cholesky = np.linalg.cholesky(covariance)
     weighted_design = np.linalg.solve(cholesky, design)
     weighted_values = np.linalg.solve(cholesky, values)
     normal_inverse = np.linalg.inv(weighted_design.T @ weighted_design)
     coefficients = normal_inverse @ weighted_design.T @ weighted_values
-    residuals = values - design @ coefficients
     whitened = weighted_values - weighted_design @ coefficients
-    leverage = np.einsum("ij,jk,ik->i", weighted_design, normal_inverse, weighted_design)
-    chi_square = float(whitened @ whitened)
+    return coefficients, normal_inverse, weighted_design, float(whitened @ whitened)
+
+
+def record_to_record_variance(
+    design: np.ndarray, values: np.ndarray, covariance: np.ndarray
+) -> float:
+    """Paule-Mandel variance ``s**2`` (unit of ``values`` squared): the one with which the GLS fit's chi-square
+    under ``covariance + s**2 I`` equals its degrees of freedom; 0 when the chi-square under ``covariance`` is
+    already at or below them, NaN without degrees of freedom. The chi-square falls monotonically in ``s**2``."""
+    count, parameters = design.shape
+    degrees_of_freedom = count - parameters
+    if degrees_of_freedom <= 0:
+        return math.nan
+
+    def excess(variance: float) -> float:
+        extended = covariance + variance * np.eye(count)
+        return _generalised_least_squares(design, values, extended)[3] - degrees_of_freedom
+
+    if excess(0.0) <= 0.0:
+        return 0.0
+    upper = float(np.max(np.diag(covariance)))
+    while excess(upper) > 0.0:
+        upper *= 4.0
+    return float(brentq(excess, 0.0, upper, xtol=upper * 1e-9))
+
+
+def _chosen_terms(
+    coordinates: pd.DataFrame,
+    variables: list[str],
+    base_terms: list[str],
+    extra_terms: list[str],
+    values: np.ndarray,
+    covariance: np.ndarray,
+) -> list[str]:
+    """The base curvature terms plus each extra power, in turn, whose addition lowers the chi-square by more
+    than the 1 - :data:`LACK_OF_FIT_SIGNIFICANCE` point of chi-square on one degree of freedom."""
+    threshold = float(chi2.isf(LACK_OF_FIT_SIGNIFICANCE, 1))
+    terms = list(base_terms)
+    current = _generalised_least_squares(
+        _design(coordinates, variables, terms), values, covariance
+    )[3]
+    for term in extra_terms:
+        design = _design(coordinates, variables, terms + [term])
+        if design.shape[0] <= design.shape[1]:
+            continue
+        candidate = _generalised_least_squares(design, values, covariance)[3]
+        if current - candidate > threshold:
+            terms.append(term)
+            current = candidate
+    return terms
+
+
+def _with_record_variance(covariance: np.ndarray, record_variance: float) -> np.ndarray:
+    """``covariance + record_variance I`` (``covariance`` alone when the variance could not be measured)."""
+    if not math.isfinite(record_variance):
+        return covariance
+    return covariance + record_variance * np.eye(len(covariance))
+
+
+def _weighted_fit(
+    design: np.ndarray,
+    values: np.ndarray,
+    covariance: np.ndarray,
+    record_variance: float,
+    repeatability_degrees_of_freedom: int,
+) -> tuple[np.ndarray, np.ndarray, LoadFitDiagnostics]:
+    """GLS under ``covariance + record_variance I``: coefficients, their standard errors (inflated when the
+    chi-square test still rejects) and diagnostics."""
+    extended = _with_record_variance(covariance, record_variance)
+    coefficients, normal_inverse, weighted_design, chi_square = _generalised_least_squares(
+        design, values, extended
+    )
+    residuals = values - design @ coefficients
+    own_chi_square = float(residuals @ np.linalg.solve(covariance, residuals))
     degrees_of_freedom = len(values) - design.shape[1]
-    reduced = chi_square / degrees_of_freedom if degrees_of_freedom > 0 else math.nan
-    inflation = math.sqrt(reduced) if reduced > 1.0 else 1.0
+    inflation = 1.0
+    if (
+        degrees_of_freedom > 0
+        and chi2.sf(chi_square, degrees_of_freedom) < LACK_OF_FIT_SIGNIFICANCE
+    ):
+        inflation = math.sqrt(chi_square / degrees_of_freedom)
     sigma = np.sqrt(np.diag(normal_inverse)) * inflation
     return (
         coefficients,
         sigma,
         LoadFitDiagnostics(
             residuals=residuals,
-            normalised_residuals=residuals / np.sqrt(np.diag(covariance)),
-            leverage=leverage,
-            chi_square=chi_square,
+            normalised_residuals=residuals / np.sqrt(np.diag(extended)),
+            leverage=np.einsum("ij,jk,ik->i", weighted_design, normal_inverse, weighted_design),
+            chi_square=own_chi_square,
             degrees_of_freedom=degrees_of_freedom,
-            reduced_chi_square=reduced,
+            reduced_chi_square=own_chi_square / degrees_of_freedom
+            if degrees_of_freedom > 0
+            else math.nan,
+            record_scatter=math.sqrt(record_variance)
+            if math.isfinite(record_variance)
+            else math.nan,
+            repeatability_degrees_of_freedom=repeatability_degrees_of_freedom,
             standard_error_inflation=inflation,
         ),
     )
 
 
 def fit_stability_derivatives(
-    table: pd.DataFrame, configuration: str | None = None, max_sweep_order: int = 3
+    table: pd.DataFrame, configuration: str | None = None, max_sweep_order: int = 4
 ) -> StabilityDerivatives:
     """Fit the u-, w- and f-derivatives of X, Z and M to the tailed points of one configuration.
 
@@ -459,7 +573,8 @@ def fit_stability_derivatives(
     configuration : str, optional
         Name for the output; default from the table's ``tail_id`` and ``x_h_mm``.
     max_sweep_order : int
-        Highest power of a sweep's coordinate fitted (1: straight lines; 3: the default, see module notes).
+        Highest power of a sweep's coordinate that may be fitted (1: straight lines; powers up to 3 always,
+        higher ones where the lack-of-fit test asks; 4 by default, see module notes).
 
     Raises
     ------
@@ -478,10 +593,16 @@ def fit_stability_derivatives(
     # during each record (the fan reaches a set velocity only within the settle tolerance and still creeps).
     set_coordinates = _sweep_coordinates(points, steady)
     variables, not_estimable = _estimable_variables(set_coordinates)
-    nuisance = _nuisance_terms(points, set_coordinates, max_sweep_order)
+    base_order = min(max_sweep_order, BASE_SWEEP_ORDER)
+    base_terms = _nuisance_terms(points, set_coordinates, 2, base_order)
+    extra_terms = _nuisance_terms(points, set_coordinates, base_order + 1, max_sweep_order)
     coordinates = _sweep_coordinates(points, steady, measured=True)
     derivative_design = coordinates[[_VARIABLE_COLUMNS[v] for v in variables]].to_numpy()
-    design = _design(coordinates, variables, nuisance)
+    design = _design(coordinates, variables, base_terms)
+    richest = _design(coordinates, variables, base_terms + extra_terms)
+    if richest.shape[0] <= richest.shape[1]:
+        # Every sweep with all its powers leaves no residual: the richest fit that leaves some measures s.
+        richest = design
     if len(points) < design.shape[1]:
         raise UserInputError(
             "sweep table",
@@ -506,7 +627,7 @@ def fit_stability_derivatives(
         ),
         condition_number=condition_number,
         variance_inflation=_variance_inflation(derivative_design, variables),
-        nuisance_terms=nuisance,
+        nuisance_terms={},
         variables=variables,
         not_estimable={
             **{load + v: reason for v, reason in not_estimable.items() for load, _, _ in LOADS},
@@ -523,14 +644,24 @@ def fit_stability_derivatives(
             raise UserInputError(
                 f"sweep table: {column}", "values and standard errors must be finite, errors > 0"
             )
-        covariance = point_covariance(points, column)
-        coefficients, sigma, diagnostics = _weighted_fit(design, values, covariance)
+        covariance = point_covariance(points, column, pool_cycle_scatter=True)
+        record_variance = record_to_record_variance(richest, values, covariance)
+        extended = _with_record_variance(covariance, record_variance)
+        terms = _chosen_terms(coordinates, variables, base_terms, extra_terms, values, extended)
+        coefficients, sigma, diagnostics = _weighted_fit(
+            _design(coordinates, variables, terms),
+            values,
+            covariance,
+            record_variance,
+            richest.shape[0] - richest.shape[1],
+        )
+        result.nuisance_terms[load] = terms
+        result.diagnostics[load] = diagnostics
         result.coefficients[load] = coefficients
         names = [f"{load}0"] + [load + variable for variable in variables]
         for index, name in enumerate(names):
             setattr(result, name, float(coefficients[index]))
             result.sigma[name] = float(sigma[index])
-        result.diagnostics[load] = diagnostics
     result.statements = _statements(result)
     return result
 
@@ -565,12 +696,13 @@ def _statements(result: StabilityDerivatives) -> list[str]:
         f"w0 = {result.steady_state.w_m_s:+.3f} m/s).",
         NOT_MEASURABLE_STATEMENT,
     ]
+    lines.append(_repeatability_statement(result))
     for load, diagnostics in result.diagnostics.items():
         if diagnostics.standard_error_inflation > 1.0:
             lines.append(
-                f"{load}: reduced chi-square {diagnostics.reduced_chi_square:.2f} > 1 on "
-                f"{diagnostics.degrees_of_freedom} degrees of freedom: the points scatter more than their "
-                f"standard errors say; sigmas inflated by sqrt(chi2_red) = "
+                f"{load}: the model still disagrees with its points beyond their errors and the records' "
+                f"scatter (chi-square test p < {LACK_OF_FIT_SIGNIFICANCE:g} on {diagnostics.degrees_of_freedom} "
+                f"degrees of freedom); sigmas inflated by sqrt(chi2_red) = "
                 f"{diagnostics.standard_error_inflation:.2f}."
             )
     unresolved = {
@@ -601,10 +733,45 @@ def _statements(result: StabilityDerivatives) -> list[str]:
             + ", ".join(f"{name} {value:.0f}" for name, value in high_vif.items())
             + " (> 10): the sweeps barely separate these variables."
         )
-    if result.nuisance_terms:
+    common_terms = [
+        term
+        for term in next(iter(result.nuisance_terms.values()), [])
+        if all(term in terms for terms in result.nuisance_terms.values())
+    ]
+    added = {
+        load: [term for term in terms if term not in common_terms]
+        for load, terms in result.nuisance_terms.items()
+    }
+    if any(result.nuisance_terms.values()):
         lines.append(
             "Curvature along the sweeps fitted as nuisance terms ("
-            + ", ".join(result.nuisance_terms)
-            + "), so the derivatives are local slopes at the steady state, not chords."
+            + ", ".join(common_terms)
+            + "".join(f"; {load} also {', '.join(terms)}" for load, terms in added.items() if terms)
+            + "), so the derivatives are local slopes at the steady state, not chords"
+            + (
+                " (powers above 3 added where the lack-of-fit test asked)."
+                if any(added.values())
+                else "."
+            )
         )
     return lines
+
+
+def _repeatability_statement(result: StabilityDerivatives) -> str:
+    """One sentence: the record-to-record scatter each load's fit measured and added to every point."""
+    degrees = {d.repeatability_degrees_of_freedom for d in result.diagnostics.values()}
+    if not all(math.isfinite(d.record_scatter) for d in result.diagnostics.values()):
+        return (
+            "Derivative fit: the records' scatter beyond their errors is not measured (no repeated set points and "
+            "no spare sweep offsets); sigmas come from the points' cycle scatter and tares alone."
+        )
+    parts = []
+    for (load, _, unit), diagnostics in zip(LOADS, result.diagnostics.values(), strict=True):
+        scatter = diagnostics.record_scatter
+        parts.append(f"{load} {scatter:.2g} {unit}" if scatter > 0 else f"{load} none")
+    return (
+        "Derivative fit: the records scatter beyond their cycle scatter and tares by "
+        + ", ".join(parts)
+        + f" (1 sigma, measured on the {max(degrees)} residual degrees of freedom of the steady state's repeats "
+        "and spare sweep offsets), added to every point's error."
+    )

@@ -4,6 +4,14 @@ A point's load is its cycle mean minus a zero. Its own error (``<load>_se``, cyc
 other point's. The zero is a weighted sum of its run's wind-off tares (``tare_terms``: ``<tare id>=<weight>``;
 ``balance.run_drift_fit``), so points whose zeros use the same tare share that tare's error in proportion to their
 weights on it. Used by the derivative fit and by the pooling of repeats for the tail's contribution.
+
+A record's cycle scatter is itself an estimate, and a rough one: its error comes from about 25 cycle means that
+neighbouring cycles' shared boundaries correlate negatively, so the long-run variance ``c0 + 2 c1`` is a small
+difference of large terms (``balance.point_loads.standard_error_of_cycle_mean``); on the simulated rig the estimates
+of one run's records at one flapping frequency spread over a factor of 3 for the same noise. A fit weighting each
+point by its own estimate trusts the records whose scatter happened to come out small. ``pooled_cycle_scatter``
+replaces each record's estimate by the mean variance over the records of its run at its flapping frequency (the
+same balance, flapping and flow noise), which the derivative fit uses.
 """
 
 from __future__ import annotations
@@ -44,8 +52,32 @@ def shared_tare_errors(points: pd.DataFrame, column: str) -> np.ndarray:
     return errors
 
 
-def point_covariance(points: pd.DataFrame, column: str) -> np.ndarray:
+POOLING_KEYS = ("run_id", "f_set_hz")
+"""Records whose cycle-scatter estimates are pooled: one run, one flapping frequency set point."""
+
+
+def pooled_cycle_scatter(points: pd.DataFrame, column: str) -> np.ndarray:
+    """Each row's ``<column>_se`` replaced by the root mean square of ``<column>_se`` over the rows of its run
+    (``run_id``) at its flapping frequency (``f_set_hz``), unit of ``column`` (module notes); the keys the table
+    lacks are left out of the grouping."""
+    keys = [key for key in POOLING_KEYS if key in points]
+    variances = points[f"{column}_se"].astype(float) ** 2
+    if not keys:
+        return np.full(len(points), np.sqrt(variances.mean()))
+    groups = [points[key].round(6) if key == "f_set_hz" else points[key] for key in keys]
+    return np.sqrt(variances.groupby(groups).transform("mean").to_numpy(dtype=float))
+
+
+def point_covariance(
+    points: pd.DataFrame, column: str, pool_cycle_scatter: bool = False
+) -> np.ndarray:
     """Covariance (unit of ``column`` squared) of ``column`` over the rows of ``points``: ``diag(se^2) + E E^T``
-    with ``E`` the errors the points take from their tares (:func:`shared_tare_errors`; tares independent)."""
+    with ``E`` the errors the points take from their tares (:func:`shared_tare_errors`; tares independent);
+    ``pool_cycle_scatter``: ``se`` from :func:`pooled_cycle_scatter`."""
     shared = shared_tare_errors(points, column)
-    return np.diag(points[f"{column}_se"].to_numpy(dtype=float) ** 2) + shared @ shared.T
+    own = (
+        pooled_cycle_scatter(points, column)
+        if pool_cycle_scatter
+        else points[f"{column}_se"].to_numpy(dtype=float)
+    )
+    return np.diag(own**2) + shared @ shared.T

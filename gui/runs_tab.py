@@ -182,9 +182,10 @@ class RunsTab(QtWidgets.QWidget):
         rows = []
         for configuration in result["configurations"]:
             lines.append(f"configuration {configuration['configuration']}")
-            statements = [configuration.get("drift_statement", "")] + configuration.get(
-                "tail_statements", []
-            )
+            statements = [
+                configuration.get("drift_statement", ""),
+                configuration.get("derivatives", {}).get("repeatability_statement", ""),
+            ] + configuration.get("tail_statements", [])
             lines += [f"  {text}" for text in statements if text]
             rows += derivative_rows(configuration)
         self.details.setPlainText("\n".join(lines))

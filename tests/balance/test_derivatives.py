@@ -6,6 +6,7 @@ import tomllib
 import numpy as np
 import pandas as pd
 import pytest
+from scipy.stats import chi2
 
 from ornitail.acquisition.sweep_plan import plan_from_document
 from ornitail.balance.derivatives import (
@@ -101,7 +102,7 @@ def test_linear_loads_with_curvature_along_the_sweeps_are_recovered_exactly():
     assert 1.0 <= fit.condition_number < 10.0
 
 
-def test_scatter_beyond_the_stated_errors_inflates_sigma_and_says_so():
+def test_scatter_beyond_the_stated_errors_is_measured_added_to_every_point_and_said():
     points = one_variable_sweep_points()
     scatter = np.random.default_rng(4).normal(0.0, 3e-5, len(points))
 
@@ -112,17 +113,45 @@ def test_scatter_beyond_the_stated_errors_inflates_sigma_and_says_so():
     diagnostics = stated.diagnostics["X"]
     # Scatter 3x the stated 1e-5: chi2_red ~ 9 (chi-square on 11 dof: between 3 and 20 with >99 % probability).
     assert 3.0 < diagnostics.reduced_chi_square < 20.0
-    assert diagnostics.standard_error_inflation == pytest.approx(
-        math.sqrt(diagnostics.reduced_chi_square)
+    # The record-to-record variance brings the fit's chi-square to its 11 degrees of freedom: stated plus record
+    # variance is the scatter's 9e-10 within chi-square's 99 % band on 11 degrees of freedom.
+    total_variance = 1e-10 + diagnostics.record_scatter**2
+    assert chi2.ppf(0.005, 11) / 11 < total_variance / 9e-10 < chi2.ppf(0.995, 11) / 11
+    assert diagnostics.repeatability_degrees_of_freedom == 15 - 4
+    assert diagnostics.standard_error_inflation == 1.0
+    # Its sigmas are those of a fit whose points had said that total error from the start (no scatter left).
+    honest = fit_stability_derivatives(
+        with_loads(points, loads, se=math.sqrt(total_variance)), max_sweep_order=1
     )
-    honest = fit_stability_derivatives(with_loads(points, loads, se=3e-5), max_sweep_order=1)
-    # Inflation makes sigma what it would have been with honest errors, times the chi-square's own scatter.
-    assert stated.sigma["Xu"] == pytest.approx(
-        honest.sigma["Xu"] * math.sqrt(honest.diagnostics["X"].reduced_chi_square), rel=1e-9
-    )
-    assert any(
-        "inflated by sqrt(chi2_red)" in line and line.startswith("X:") for line in stated.statements
-    )
+    assert honest.diagnostics["X"].record_scatter == pytest.approx(0.0, abs=1e-9)
+    assert stated.sigma["Xu"] == pytest.approx(honest.sigma["Xu"], rel=1e-6)
+    assert abs(stated.X0 - honest.X0) <= 1e-9 * abs(honest.X0)
+    statement = next(line for line in stated.statements if "records scatter beyond" in line)
+    assert f"X {diagnostics.record_scatter:.2g} N" in statement
+
+
+def test_a_load_that_is_not_cubic_along_a_sweep_gets_its_quartic_and_no_inflated_sigmas():
+    """M quartic along the velocity sweep (as on the simulator, at M's resolution): the lack-of-fit test adds the
+    fourth power for M only, the intercept is not pulled by the curvature, and the slopes keep their sigmas."""
+    cos0, sin0 = math.cos(math.radians(THETA0_DEG)), math.sin(math.radians(THETA0_DEG))
+    points = pd.concat([one_variable_sweep_points(), one_variable_sweep_points().iloc[:3]])
+    points = points.reset_index(drop=True)
+
+    def loads(du, dw, df):
+        along = -(du * cos0 + dw * sin0)
+        return 0.1 - 0.13 * du, -0.2 + 0.05 * du, -5e-4 + 4e-3 * du + 1e-3 * dw + 2.0 * along**4
+
+    fit = fit_stability_derivatives(with_loads(points, loads, se=1e-7))
+    assert "dV_along^4" in fit.nuisance_terms["M"]
+    assert "dV_along^4" not in fit.nuisance_terms["X"]
+    assert abs(fit.M0 + 5e-4) <= 1e-9
+    assert fit.diagnostics["M"].record_scatter == pytest.approx(0.0, abs=1e-12)
+    cubic = fit_stability_derivatives(with_loads(points, loads, se=1e-7), max_sweep_order=3)
+    # Capped at cubes, the curvature (2 x 0.25**4 = 8e-3 N m at the sweep's ends) can only be read as scatter of
+    # the records: it swells every M sigma, the pitch sweep's Mw too, far beyond the quartic fit's.
+    assert cubic.diagnostics["M"].record_scatter > 100 * 1e-7
+    assert cubic.sigma["Mw"] > 10 * fit.sigma["Mw"]
+    assert any("M also dV_along^4" in line for line in fit.statements)
 
 
 def test_derivatives_within_their_noise_are_labelled_not_resolved_from_zero():
@@ -219,15 +248,15 @@ def test_derivative_intervals_cover_the_simulator_truth_over_many_seeds(make_sim
     )
     scores = coverage_z_scores(sweep, range(30))
     covered = np.abs(scores) <= 2.0
-    # With balance noise only and 0.6 s records, the fit's lack of fit (M is not quite cubic along the velocity
-    # sweep) is beyond the points' noise, so the sigmas are scaled by sqrt(chi2_red) from the fit's own 8
-    # residual degrees of freedom: +-2 such sigmas cover P(|t_8| <= 2) = 0.92, not 0.954. Over 360 intervals
-    # the binomial sd at 0.92 is 0.014, so 0.88 is 3 sd below it; per value (30 sweeps, sd 0.05) 0.8 is 2.4 sd.
+    # The records' scatter beyond their errors is measured on the 5 residual degrees of freedom of the steady
+    # state's repeats and added to every point: where it dominates a sigma, +-2 sigmas cover like a t interval
+    # on 5 degrees of freedom, P(|t_5| <= 2) = 0.90, and 0.954 where it is small. Over 360 intervals the binomial
+    # sd at 0.92 is 0.014, so 0.88 is 3 sd below it; per value (30 sweeps, sd 0.05) 0.8 is 2.4 sd.
     assert covered.mean() >= 0.88
     assert covered.mean(axis=0).min() >= 0.8
     # Sigma is not too small: the rms of the z-scores of each value stays below 1.5 (sd of an rms of 30 unit
-    # normals is ~0.13, so 1.5 is 4 sd above 1). Nor absurdly large: the pooled rms stays above 0.35 (the
-    # inflated M sigmas are conservative, the simulator's M being not quite cubic along the sweeps).
+    # normals is ~0.13, so 1.5 is 4 sd above 1). Nor absurdly large: the pooled rms stays above 0.35 (sigmas 3x
+    # too large, as one chi-square factor for all made M's when M along the velocity sweep is not cubic).
     rms = np.sqrt((scores**2).mean(axis=0))
     assert rms.max() <= 1.5
     assert np.sqrt((scores**2).mean()) >= 0.35
@@ -279,7 +308,7 @@ def test_with_every_effect_on_the_tail_and_derivative_intervals_cover_the_simula
     sweep = make_simulated_sweep(plan=shipped_plan_with(0.6), effects=effects)
     scores = np.array([list(sweep_z_scores(sweep, seed, 1.0).values()) for seed in range(8)])
     assert scores.shape == (8, 15)  # tail X, Z, M, then X0 ... Mf
-    # 120 intervals, nominal 0.95 (0.92 where a fit's lack of fit scales its sigmas, see above); the 15 values
+    # 120 intervals, nominal 0.95 (0.90-0.95 where the records' measured scatter dominates, see above); the 15 values
     # of one sweep share its tares, so the effective count is nearer 8 x 5 = 40 (binomial sd ~0.04 at 0.93):
     # 0.83 is 2.5 sd below. Honest sigmas give an rms z of 1 (its sd over ~40 effective values is ~0.11); the
     # band 0.7-1.45 catches sigmas that are 1.4x too large (the old tare error) or 1.45x too small.

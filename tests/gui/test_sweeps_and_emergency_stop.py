@@ -123,6 +123,9 @@ def test_abort_pause_resume_complete_and_process_a_sweep(connected_at_2_khz, qtb
     value = float(runs_tab.derivatives.item(row, 1).text())
     low, high = (float(x) for x in runs_tab.derivatives.item(row, 2).text().strip("[]").split(","))
     assert low < value < high
+    # The drift fit's and the derivative fit's checks are said in the tab, one line each.
+    details = runs_tab.details.toPlainText()
+    assert "Balance drift" in details and "Derivative fit: the records" in details, details
     # The processed figures can be looked at in the tab (every PNG processing wrote, one shown).
     figures = [runs_tab.figure_choice.itemText(i) for i in range(runs_tab.figure_choice.count())]
     assert any(name.endswith("-sweep-fits") for name in figures), figures
