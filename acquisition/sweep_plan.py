@@ -53,6 +53,9 @@ MIN_SAMPLE_RATE_HZ = 100.0
 MAX_SAMPLE_RATE_HZ = 100_000.0
 """Fastest balance sampling rate accepted in a plan, Hz (the rig's board may allow less)."""
 
+RETURN_TO_REFERENCE_SWEEP = "reference"
+"""``SetPoint.sweep`` of a return to the steady state after a sweep (``[protocol] return_to_reference``)."""
+
 
 @dataclass(frozen=True)
 class SetPoint:
@@ -481,10 +484,10 @@ def _pitch_groups(plan: SweepPlan, segment: _Segment) -> list[list[dict[str, Any
                 point = _point(plan, variable, repeat, **{field_name: offset})
                 by_pitch.setdefault(point["pitch_rad"], []).append(point)
         if plan.return_to_reference and offsets and variable != "theta":
-            by_pitch[plan.theta0_rad].append(_point(plan, "reference", 0))
+            by_pitch[plan.theta0_rad].append(_point(plan, RETURN_TO_REFERENCE_SWEEP, 0))
     groups = [by_pitch[pitch] for pitch in sorted(by_pitch)]
     if plan.return_to_reference and plan.sweep_offsets.get("theta"):
-        groups.append([_point(plan, "reference", 0)])
+        groups.append([_point(plan, RETURN_TO_REFERENCE_SWEEP, 0)])
     return groups
 
 

@@ -53,10 +53,13 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from scipy.optimize import brentq
 from scipy.stats import chi2
 
-from ornitail.balance.point_covariance import point_covariance
+from ornitail.balance.point_covariance import (
+    generalised_least_squares,
+    point_covariance,
+    record_to_record_variance,
+)
 from ornitail.core.errors import UserInputError
 from ornitail.core.units import quotient_unit
 
@@ -445,42 +448,6 @@ def _variance_inflation(design: np.ndarray, names: list[str]) -> dict[str, float
     return dict(zip(names, np.diag(np.linalg.inv(correlation)).tolist(), strict=True))
 
 
-def _generalised_least_squares(
-    design: np.ndarray, values: np.ndarray, covariance: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """Coefficients, ``(A^T C^-1 A)^-1``, the whitened design and the chi-square of a GLS fit."""
-    cholesky = np.linalg.cholesky(covariance)
-    weighted_design = np.linalg.solve(cholesky, design)
-    weighted_values = np.linalg.solve(cholesky, values)
-    normal_inverse = np.linalg.inv(weighted_design.T @ weighted_design)
-    coefficients = normal_inverse @ weighted_design.T @ weighted_values
-    whitened = weighted_values - weighted_design @ coefficients
-    return coefficients, normal_inverse, weighted_design, float(whitened @ whitened)
-
-
-def record_to_record_variance(
-    design: np.ndarray, values: np.ndarray, covariance: np.ndarray
-) -> float:
-    """Paule-Mandel variance ``s**2`` (unit of ``values`` squared): the one with which the GLS fit's chi-square
-    under ``covariance + s**2 I`` equals its degrees of freedom; 0 when the chi-square under ``covariance`` is
-    already at or below them, NaN without degrees of freedom. The chi-square falls monotonically in ``s**2``."""
-    count, parameters = design.shape
-    degrees_of_freedom = count - parameters
-    if degrees_of_freedom <= 0:
-        return math.nan
-
-    def excess(variance: float) -> float:
-        extended = covariance + variance * np.eye(count)
-        return _generalised_least_squares(design, values, extended)[3] - degrees_of_freedom
-
-    if excess(0.0) <= 0.0:
-        return 0.0
-    upper = float(np.max(np.diag(covariance)))
-    while excess(upper) > 0.0:
-        upper *= 4.0
-    return float(brentq(excess, 0.0, upper, xtol=upper * 1e-9))
-
-
 def _chosen_terms(
     coordinates: pd.DataFrame,
     variables: list[str],
@@ -493,14 +460,14 @@ def _chosen_terms(
     than the 1 - :data:`LACK_OF_FIT_SIGNIFICANCE` point of chi-square on one degree of freedom."""
     threshold = float(chi2.isf(LACK_OF_FIT_SIGNIFICANCE, 1))
     terms = list(base_terms)
-    current = _generalised_least_squares(
-        _design(coordinates, variables, terms), values, covariance
-    )[3]
+    current = generalised_least_squares(_design(coordinates, variables, terms), values, covariance)[
+        3
+    ]
     for term in extra_terms:
         design = _design(coordinates, variables, terms + [term])
         if design.shape[0] <= design.shape[1]:
             continue
-        candidate = _generalised_least_squares(design, values, covariance)[3]
+        candidate = generalised_least_squares(design, values, covariance)[3]
         if current - candidate > threshold:
             terms.append(term)
             current = candidate
@@ -524,7 +491,7 @@ def _weighted_fit(
     """GLS under ``covariance + record_variance I``: coefficients, their standard errors (inflated when the
     chi-square test still rejects) and diagnostics."""
     extended = _with_record_variance(covariance, record_variance)
-    coefficients, normal_inverse, weighted_design, chi_square = _generalised_least_squares(
+    coefficients, normal_inverse, weighted_design, chi_square = generalised_least_squares(
         design, values, extended
     )
     residuals = values - design @ coefficients

@@ -12,12 +12,20 @@ of one run's records at one flapping frequency spread over a factor of 3 for the
 point by its own estimate trusts the records whose scatter happened to come out small. ``pooled_cycle_scatter``
 replaces each record's estimate by the mean variance over the records of its run at its flapping frequency (the
 same balance, flapping and flow noise), which the derivative fit uses.
+
+Records also scatter beyond their cycle scatter and tares (slow flow unsteadiness, drift the model does not follow,
+the conditions read during a record). ``record_to_record_variance`` measures that extra variance where repeats
+show it: the Paule-Mandel value, with which a generalised least-squares fit's chi-square equals its degrees of
+freedom. The derivative fit and the tail's contribution add it to every record they use.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pandas as pd
+from scipy.optimize import brentq
 
 
 def shared_tare_errors(points: pd.DataFrame, column: str) -> np.ndarray:
@@ -81,3 +89,39 @@ def point_covariance(
         else points[f"{column}_se"].to_numpy(dtype=float)
     )
     return np.diag(own**2) + shared @ shared.T
+
+
+def generalised_least_squares(
+    design: np.ndarray, values: np.ndarray, covariance: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """Coefficients, ``(A^T C^-1 A)^-1``, the whitened design and the chi-square of a GLS fit."""
+    cholesky = np.linalg.cholesky(covariance)
+    weighted_design = np.linalg.solve(cholesky, design)
+    weighted_values = np.linalg.solve(cholesky, values)
+    normal_inverse = np.linalg.inv(weighted_design.T @ weighted_design)
+    coefficients = normal_inverse @ weighted_design.T @ weighted_values
+    whitened = weighted_values - weighted_design @ coefficients
+    return coefficients, normal_inverse, weighted_design, float(whitened @ whitened)
+
+
+def record_to_record_variance(
+    design: np.ndarray, values: np.ndarray, covariance: np.ndarray
+) -> float:
+    """Paule-Mandel variance ``s**2`` (unit of ``values`` squared): the one with which the GLS fit's chi-square
+    under ``covariance + s**2 I`` equals its degrees of freedom; 0 when the chi-square under ``covariance`` is
+    already at or below them, NaN without degrees of freedom. The chi-square falls monotonically in ``s**2``."""
+    count, parameters = design.shape
+    degrees_of_freedom = count - parameters
+    if degrees_of_freedom <= 0:
+        return math.nan
+
+    def excess(variance: float) -> float:
+        extended = covariance + variance * np.eye(count)
+        return generalised_least_squares(design, values, extended)[3] - degrees_of_freedom
+
+    if excess(0.0) <= 0.0:
+        return 0.0
+    upper = float(np.max(np.diag(covariance)))
+    while excess(upper) > 0.0:
+        upper *= 4.0
+    return float(brentq(excess, 0.0, upper, xtol=upper * 1e-9))

@@ -56,22 +56,28 @@ def tail_contribution_statements(contribution: pd.DataFrame) -> list[str]:
 
 def repeatability_statement(contribution: pd.DataFrame) -> str:
     """One sentence on the repeatability check of a :func:`tail_contribution` table: which loads' repeats
-    scattered beyond their errors and by how much their sigma was inflated (empty for an empty table)."""
+    scattered beyond their errors, by how much per record, and how much their sigma grew (empty for an empty
+    table)."""
     if contribution.empty:
         return ""
     inflated = []
     for _, row in contribution.iterrows():
-        for symbol, name, _unit in _STATED_LOADS:
-            for state in ("tailed", "tailless"):
-                factor = float(row[f"{name}_repeat_inflation_{state}"])
-                if factor > 1.0:
-                    inflated.append(
-                        f"{state} {symbol} at theta {row['theta_deg']:.2f} deg (chi-square "
-                        f"{float(row[f'{name}_repeat_chi_square_{state}']):.1f} on "
-                        f"{int(row[f'repeats_{state}']) - 1}, sigma x{factor:.2f})"
-                    )
+        for symbol, name, unit in _STATED_LOADS:
+            scatter = float(row[f"{name}_record_scatter"])
+            if scatter > 0.0:
+                inflated.append(
+                    f"{symbol} at theta {row['theta_deg']:.2f} deg by {scatter:.2g} {unit} per record (chi-square "
+                    f"{float(row[f'{name}_repeat_chi_square_tailed']):.1f} on "
+                    f"{int(row['repeats_tailed']) - 1} tailed, "
+                    f"{float(row[f'{name}_repeat_chi_square_tailless']):.1f} on "
+                    f"{int(row['repeats_tailless']) - 1} tailless; sigma x"
+                    f"{float(row[f'{name}_repeat_inflation_tailed']):.2f} tailed, x"
+                    f"{float(row[f'{name}_repeat_inflation_tailless']):.2f} tailless)"
+                )
     if not inflated:
         return "Repeatability check: the repeats agree within their errors (no sigma inflated)."
     return (
-        "Repeatability check: repeats scatter beyond their errors for " + "; ".join(inflated) + "."
+        "Repeatability check: repeats scatter beyond their errors for "
+        + "; ".join(inflated)
+        + ", added to each repeat's error."
     )

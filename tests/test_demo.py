@@ -40,6 +40,8 @@ def test_demo_records_the_study_protocol_and_prints_cycle_averaged_loads(backgro
         "Drift fit" in result["drift_statement"]
         and "Repeatability check" in result["drift_statement"]
     )
+    # The derivative fit's check of the records' scatter, measured on the steady state's repeats, in one line.
+    assert result["repeatability_statement"].startswith("Derivative fit: the records")
     # The simulated vehicle's own truth at the steady state (tunnel environment, the rig's default effects).
     configuration = study_configuration("S3", 98.0)
     truth = {

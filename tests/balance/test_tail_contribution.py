@@ -72,7 +72,7 @@ def repeat_table(means_by_state, se=1e-5, tare_se=2e-5, two_sigma=1e-3):
     return pd.DataFrame(rows)
 
 
-def test_repeats_pool_with_the_shared_tare_and_inflate_only_when_they_scatter_beyond_their_errors():
+def test_repeats_pool_with_the_shared_tare_and_carry_the_scatter_they_show_beyond_their_errors():
     consistent = tail_contribution(repeat_table({True: [0.1, 0.1, 0.1], False: [0.09, 0.09, 0.09]}))
     # Repeats agree: sigma per state = sqrt(3 se^2 / 9 + tare_se^2) (the three share one tare), then in quadrature.
     per_state = math.sqrt(3 * 1e-5**2 / 9 + 2e-5**2)
@@ -91,15 +91,25 @@ def test_repeats_pool_with_the_shared_tare_and_inflate_only_when_they_scatter_be
     scattered = tail_contribution(
         repeat_table({True: [0.099, 0.1, 0.101], False: [0.09, 0.09, 0.09]})
     )
-    # Repeats scatter by 1e-3 (sd), far beyond their stated 1e-5: chi-square 2e4 on 2. Their own errors grow to
-    # the scatter (sd^2 / 3 for the mean); the shared tare stays as it was.
+    # Tailed repeats scatter by 1e-3 (sd), far beyond their stated 1e-5: chi-square 2e4 on 2, the tailless ones 0
+    # on 2. The record variance s^2 brings the joint chi-square 2e-6 / (se^2 + s^2) to its 4 degrees of freedom:
+    # se^2 + s^2 = 5e-7. Both states' repeats carry it (the rig's records, not the tail's); the shared tare stays.
     assert scattered.loc[0, "x_n_repeat_chi_square_tailed"] == pytest.approx(2e4)
-    assert scattered.loc[0, "x_n_repeat_inflation_tailed"] == pytest.approx(100.0)
-    assert scattered.loc[0, "x_n_sigma"] == pytest.approx(
-        math.hypot(math.sqrt(1e-3**2 / 3 + 2e-5**2), per_state)
+    assert scattered.loc[0, "x_n_repeat_chi_square_tailless"] == pytest.approx(0.0, abs=1e-9)
+    assert scattered.loc[0, "x_n_record_scatter"] == pytest.approx(
+        math.sqrt(5e-7 - 1e-10), rel=1e-6
+    )
+    with_scatter = math.sqrt(5e-7 / 3 + 2e-5**2)
+    assert scattered.loc[0, "x_n_sigma"] == pytest.approx(math.sqrt(2) * with_scatter, rel=1e-6)
+    assert scattered.loc[0, "x_n_repeat_inflation_tailless"] == pytest.approx(
+        with_scatter / per_state, rel=1e-6
     )
     statement = repeatability_statement(scattered)
-    assert "tailed X at theta 25.00 deg (chi-square 20000.0 on 2, sigma x100.00)" in statement
+    assert (
+        "X at theta 25.00 deg by 0.00071 N per record (chi-square 20000.0 on 2 tailed, 0.0 on 2"
+        in statement
+    )
+    assert "Z at theta" in statement and "added to each repeat's error" in statement
 
 
 @pytest.mark.parametrize(
@@ -129,3 +139,16 @@ def test_difference_below_twice_its_sigma_is_not_resolvable_even_above_resolutio
         line for line in tail_contribution_statements(contribution) if line.startswith("X ")
     )
     assert "below the measurement uncertainty" in x_line and "balance resolution" in x_line
+
+
+def test_the_returns_to_reference_are_left_out_of_the_tail_difference():
+    """The tail's difference is between the interleaved steady-state repeats; the returns to the steady state after
+    each sweep (all in the first tailed run) do not enter it, however far off they sit."""
+    table = repeat_table({True: [0.1, 0.1, 0.1], False: [0.09, 0.09, 0.09]}).assign(
+        sweep="steady_state"
+    )
+    returns = table[table["tailed"]].assign(sweep="reference", x_n=0.2, tare_id="tare-first-run")
+    with_returns = tail_contribution(pd.concat([table, returns], ignore_index=True))
+    assert with_returns.loc[0, "x_n"] == pytest.approx(0.01)
+    assert with_returns.loc[0, "repeats_tailed"] == 3
+    pd.testing.assert_frame_equal(with_returns, tail_contribution(table))
