@@ -121,7 +121,7 @@ def record_to_record_variance(
 
     if excess(0.0) <= 0.0:
         return 0.0
-    upper = float(np.max(np.diag(covariance)))
+    upper = max(float(np.max(np.diag(covariance))), float(np.finfo(float).tiny))
     while excess(upper) > 0.0:
         upper *= 4.0
     return float(brentq(excess, 0.0, upper, xtol=upper * 1e-9))

@@ -610,8 +610,7 @@ def tail_contribution(table: pd.DataFrame) -> pd.DataFrame:
     on each state's two degrees of freedom (before stop 20) let through: the tail's X covered the truth in 0.85
     of 40 sweeps. Always taking the larger of the propagated error and the repeats' ``std / sqrt(n)`` (earlier
     still) overstated the error: with three repeats that scatter is a two-degree-of-freedom guess, larger than the
-    truth half the
-    time. ``<load>_sigma`` is the standard error of the difference
+    truth half the time. ``<load>_sigma`` is the standard error of the difference
     (tailed and tailless independent); ``<load>_resolvable`` says whether the difference exceeds both twice that
     sigma and, for forces, the balance resolution (moments: twice sigma alone); ``<load>_cycle_2sigma_tailed`` and
     ``_tailless`` are the single-cycle scatter (2 sigma over cycles). Loads about the rig's reference point, so

@@ -130,6 +130,28 @@ def test_scatter_beyond_the_stated_errors_is_measured_added_to_every_point_and_s
     assert f"X {diagnostics.record_scatter:.2g} N" in statement
 
 
+def test_without_repeats_or_spare_offsets_the_records_scatter_is_not_measured_and_said_so():
+    """One steady-state record and two offsets per sweep: intercept, three slopes and three squares fix the seven
+    points exactly, so nothing is left to measure the records' scatter on: it is NaN (not a measured zero), no sigma
+    is inflated, and a line says so."""
+    protocol = one_variable_sweep_points()
+    steady = protocol["sweep"] == "steady_state"
+    sweep_ends = protocol[~steady].groupby("sweep").nth([0, -1])  # offsets -2 and +2 of each sweep
+    points = pd.concat([protocol[steady].head(1), sweep_ends]).reset_index(drop=True)
+    assert len(points) == 7
+    fit = fit_stability_derivatives(with_loads(points, lambda du, dw, df: (du, dw, df), se=1e-5))
+    for diagnostics in fit.diagnostics.values():
+        assert math.isnan(diagnostics.record_scatter)
+        assert (
+            diagnostics.degrees_of_freedom == 0
+            and diagnostics.repeatability_degrees_of_freedom == 0
+        )
+        assert diagnostics.standard_error_inflation == 1.0
+    assert any("scatter beyond their errors is not measured" in line for line in fit.statements)
+    # NaN in the JSON too: not measured, which a 0 would misstate as "no scatter".
+    assert math.isnan(fit.to_json_dict()["fit"]["M"]["record_scatter_n_m"])
+
+
 def test_a_load_that_is_not_cubic_along_a_sweep_gets_its_quartic_and_no_inflated_sigmas():
     """M quartic along the velocity sweep (as on the simulator, at M's resolution): the lack-of-fit test adds the
     fourth power for M only, the intercept is not pulled by the curvature, and the slopes keep their sigmas."""
