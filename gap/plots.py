@@ -102,7 +102,8 @@ def localisation_picture(where: dict[str, Any], folder: Path) -> list[str]:
 
 def ranking_figure(report: dict[str, Any]) -> plt.Figure:
     """Validation closure (-) of each candidate with its 90 % interval; the top set highlighted; the
-    detection threshold as a dashed line."""
+    detection rule's two lines: the closure must pass the dashed one, the interval's lower end the
+    dotted one."""
     ranking = report["ranking"]
     figure, axis = plt.subplots(figsize=(7, 0.45 * len(ranking) + 1.2))
     positions = np.arange(len(ranking))[::-1]
@@ -122,7 +123,14 @@ def ranking_figure(report: dict[str, Any]) -> plt.Figure:
         color="tab:blue",
         linestyle="--",
         linewidth=0.8,
-        label="detection threshold",
+        label="closure must exceed (null's 95th percentile)",
+    )
+    axis.axvline(
+        report["detection_rule"]["lower_bound_threshold"],
+        color="tab:blue",
+        linestyle=":",
+        linewidth=1.0,
+        label="interval's lower end must exceed (null median or materiality floor)",
     )
     axis.legend(fontsize=7)
     axis.set_xlabel("closure of the gap on validation runs, 1 - gap after / gap before (-)")

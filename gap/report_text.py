@@ -52,11 +52,11 @@ def render_report(report: dict[str, Any]) -> str:
         f"{runs['training']} to fit and {runs['validation']} to choose in the first fold, "
         f"{runs['test']} scored as test runs; seed {report['seed']})",
         f"split: {report['split']['method']}",
-        f"detection rule: validation closure above {rule['threshold']:.3f}, the larger of the 95th "
-        f"percentile of {rule['draws']} random one-parameter directions fitted the same way "
-        f"({rule['null_closures_quantile_95']:.3f}) and the materiality floor "
-        f"{rule['materiality_floor']:.2f}; 5 % bootstrap quantile above their median "
-        f"{rule['null_closures_median']:.3f}",
+        f"detection rule: validation closure above {rule['threshold']:.3f}, the 95th percentile of "
+        f"{rule['draws']} random one-parameter directions fitted the same way, and its 5 % bootstrap "
+        f"quantile above {rule['lower_bound_threshold']:.3f}, the larger of their median "
+        f"({rule['null_closures_median']:.3f}) and the materiality floor "
+        f"{rule['materiality_floor']:.2f}",
     ]
     if report["verdict"] == "effect":
         lines.append(

@@ -39,15 +39,41 @@ def test_identical_families_form_one_set_and_a_clear_winner_stands_alone():
 
 def test_a_closure_below_the_calibrated_threshold_is_not_detected():
     base = np.full(10, 10.0)
-    evidence = [_evidence("a", base * 0.89**2)]  # closes exactly 11 %, below the null's 12 %
+    evidence = [
+        _evidence("a", base * 0.89**2)
+    ]  # every run closes exactly 11 %, below the null's 12 %
     assert NULL.threshold == pytest.approx(0.12, abs=0.005)
     assert not rank_candidates(evidence, base, 100.0, 0.0, 1000, seed=0, rule=NULL).detected
     lower_null = DetectionRule("test", NULL.closures - 0.05)  # same closure, a weaker null
-    assert lower_null.threshold == pytest.approx(0.10)  # its 95th percentile is below the floor
+    assert lower_null.threshold == pytest.approx(0.069, abs=0.001)
+    assert lower_null.lower_bound_threshold == pytest.approx(
+        0.10
+    )  # its median 0.0125 is below the floor
+    # runs that all close 11 %: every resample closes 11 %, so the lower bound clears the floor too
     assert rank_candidates(evidence, base, 100.0, 0.0, 1000, seed=0, rule=lower_null).detected
     assert not rank_candidates(evidence, base, 100.0, 0.0, 1000, seed=0).detected  # no rule
     small = [_evidence("a", base * 0.92**2)]  # 8 %: beats this null, not the materiality floor
     assert not rank_candidates(small, base, 100.0, 0.0, 1000, seed=0, rule=lower_null).detected
+
+
+def test_a_closure_above_the_floor_only_on_the_runs_that_chose_it_is_not_detected():
+    """The materiality floor is held to the closure's 5 % bootstrap quantile: half the runs close 2 %
+    and half 22 %, together 1 - sqrt((0.98^2 + 0.78^2) / 2) = 11.4 %, above the floor. A resample
+    holding k of 10 runs of the better kind closes 1 - sqrt((1 - k / 10) 0.98^2 + k / 10 x 0.78^2):
+    5.7 % for k = 2 (2 or fewer: probability 0.055) and 7.5 % for k = 3 (0.17), so the 5 % quantile
+    of 1000 resamples is one of those two, below the floor. The rule before (the floor on the closure
+    itself) named it."""
+    base = np.full(10, 10.0)
+    after = base * np.tile([0.98**2, 0.78**2], 5)
+    lower_null = DetectionRule("test", NULL.closures - 0.05)
+    ranking = rank_candidates(
+        [_evidence("a", after)], base, 100.0, 0.0, 1000, seed=0, rule=lower_null
+    )
+    closure = ranking.entries[0].heldout_closure
+    assert closure == pytest.approx(1 - np.sqrt((0.98**2 + 0.78**2) / 2), abs=1e-12)
+    assert closure > max(lower_null.threshold, lower_null.lower_bound_threshold)
+    assert 0.056 < ranking.entries[0].closure_interval[0] < 0.076
+    assert not ranking.detected
 
 
 def test_a_closure_carried_by_one_run_is_not_detected():
