@@ -49,8 +49,12 @@ def test_the_gap_is_reported_on_test_manoeuvres_that_neither_fitted_nor_chose(
     assert len(diagnosis.after_residuals) == report["runs"]["total"] == 16
     rule = report["detection_rule"]
     assert rule["draws"] == 24 and rule["null_closures_quantile_95"] >= rule["null_closures_median"]
-    assert rule["threshold"] == max(rule["null_closures_quantile_95"], rule["materiality_floor"])
+    assert rule["threshold"] == rule["null_closures_quantile_95"]
+    assert rule["lower_bound_threshold"] == max(
+        rule["null_closures_median"], rule["materiality_floor"]
+    )
     assert report["ranking"][0]["validation_closure"] > rule["threshold"]
+    assert report["ranking"][0]["closure_interval"][0] > rule["lower_bound_threshold"]
 
 
 def test_added_mass_is_named_with_its_indistinguishable_inertia_twin(added_mass_report):
