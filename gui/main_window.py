@@ -22,6 +22,7 @@ from ornitail.gui.cycle_view import CycleView
 from ornitail.gui.design_tab import DesignTab
 from ornitail.gui.live_data import LiveData
 from ornitail.gui.live_view import LiveView
+from ornitail.gui.main_thread_collector import MainThreadGarbageCollector
 from ornitail.gui.message_log import MessageLog
 from ornitail.gui.rig_session import RigSession, SessionMessage
 from ornitail.gui.runs_tab import RunsTab
@@ -74,6 +75,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.timer.setTimerType(QtCore.Qt.TimerType.PreciseTimer)
         self.timer.timeout.connect(self.tick)
         self.timer.start(REDRAW_INTERVAL_MS)
+        self.garbage_collector = MainThreadGarbageCollector(self)
+        self.garbage_collector.start()
 
     def _build_layout(self) -> None:
         top = QtWidgets.QHBoxLayout()
@@ -181,4 +184,5 @@ class MainWindow(QtWidgets.QMainWindow):
         self.timer.stop()
         self.session.shutdown()
         self.session.documents.unsubscribe(self.documents_token)
+        self.garbage_collector.stop()  # once the session has disconnected
         super().closeEvent(event)
