@@ -6,9 +6,10 @@ catalog sync and, on the simulated rig, the instruments themselves), so a refere
 (a widget, a timer, pytest-qt's wait helpers in the tests) is freed in one of them: the object's C++ destructor
 then runs outside the thread that owns it, which Qt does not allow, and it can wait on a lock the GUI thread
 holds while the GUI thread waits for the GIL. pyqtgraph ships a collector for the same reason
-(``pyqtgraph.util.garbage_collector``). One CI run of the window test hung that way as far as its stacks show
-(the GUI thread entering a Qt slot, never getting the GIL, a simulated instrument thread allocating in numpy);
-it was not reproduced in 30 repeats, so the cause is likely, not proven.
+(``pyqtgraph.util.garbage_collector``). One CI run of the window test hung in a way this explains: the GUI
+thread entered a Qt slot and never got the GIL, while the one busy thread, a simulated instrument's, was
+allocating in numpy. Python stacks cannot show a C++ destructor, and the hang did not come back in 25 repeats
+here, so the cause is likely, not proven.
 
 While any window is open automatic collection is off and a timer collects, in the GUI thread, the oldest
 generation whose count has passed its threshold (as the automatic collector would have).

@@ -39,7 +39,8 @@ def _make_cycles_and_allocate_in_a_thread() -> list:
 def test_cycles_made_in_a_worker_are_freed_in_the_gui_thread_and_automatic_collection_comes_back(
     qtbot,
 ):
-    assert gc.isenabled()
+    automatic_before = gc.isenabled()
+    gc.enable()  # as a process starts; whatever an earlier test left
     owner = QtCore.QObject()
     first, second = MainThreadGarbageCollector(owner), MainThreadGarbageCollector(owner)
     first.start()
@@ -49,9 +50,8 @@ def test_cycles_made_in_a_worker_are_freed_in_the_gui_thread_and_automatic_colle
         _Cycle.finalised_in.clear()
         kept = _make_cycles_and_allocate_in_a_thread()
         assert _Cycle.finalised_in == []  # nothing collected in the worker
-        qtbot.waitUntil(
-            lambda: len(_Cycle.finalised_in) == 20, timeout=10_000
-        )  # the timer's collection
+        # the timer's collection, in this thread
+        qtbot.waitUntil(lambda: len(_Cycle.finalised_in) == 20, timeout=10_000)
         assert set(_Cycle.finalised_in) == {threading.current_thread().name}
         del kept
         first.stop()
@@ -59,10 +59,14 @@ def test_cycles_made_in_a_worker_are_freed_in_the_gui_thread_and_automatic_colle
     finally:
         first.stop()
         second.stop()
-    assert gc.isenabled()
+        enabled_after = gc.isenabled()
+        if not automatic_before:
+            gc.disable()
+    assert enabled_after
 
 
 def test_only_generations_past_their_threshold_are_collected():
+    automatic_before = gc.isenabled()
     gc.collect()
     generation_0_threshold = gc.get_threshold()[0]
     gc.disable()
@@ -75,4 +79,5 @@ def test_only_generations_past_their_threshold_are_collected():
         assert collect_due_generations() >= 1 and len(_Cycle.finalised_in) == 1
         del kept
     finally:
-        gc.enable()
+        if automatic_before:
+            gc.enable()
