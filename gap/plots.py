@@ -118,20 +118,16 @@ def ranking_figure(report: dict[str, Any]) -> plt.Figure:
     axis.barh(positions, values, xerr=errors, color=colours)
     axis.set_yticks(positions, [entry["name"] for entry in ranking])
     axis.axvline(0.0, color="black", linewidth=0.8)
-    axis.axvline(
-        report["detection_rule"]["threshold"],
-        color="tab:blue",
-        linestyle="--",
-        linewidth=0.8,
-        label="closure must exceed (null's 95th percentile)",
-    )
-    axis.axvline(
-        report["detection_rule"]["lower_bound_threshold"],
-        color="tab:blue",
-        linestyle=":",
-        linewidth=1.0,
-        label="interval's lower end must exceed (null median or materiality floor)",
-    )
+    rule = report["detection_rule"]
+    for key, style, label in (
+        ("threshold", "--", "closure must exceed (null's 95th percentile)"),
+        (
+            "lower_bound_threshold",
+            ":",
+            "interval's lower end must exceed (null median or materiality floor)",
+        ),
+    ):
+        axis.axvline(rule[key], color="tab:blue", linestyle=style, linewidth=0.9, label=label)
     axis.legend(fontsize=7)
     axis.set_xlabel("closure of the gap on validation runs, 1 - gap after / gap before (-)")
     axis.set_ylabel("candidate effect")

@@ -35,6 +35,14 @@ def test_bar_charts_carry_axis_labels_with_units(flight_report):
     (axis,) = ranking_figure(report).axes
     assert axis.get_ylabel() == "candidate effect"
     assert axis.get_xlabel().endswith("(-)")
+    # the detection rule's two bars, dashed for the closure and dotted for the interval's lower end
+    rule = report["detection_rule"]
+    bars = {
+        line.get_linestyle(): line.get_xdata()[0]
+        for line in axis.get_lines()
+        if line.get_label()[0] != "_"
+    }
+    assert bars == {"--": rule["threshold"], ":": rule["lower_bound_threshold"]}
 
 
 def test_a_diagnosis_in_a_log_ends_with_a_timestamped_progress_line(flight_report):
