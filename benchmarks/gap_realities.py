@@ -12,7 +12,8 @@
 Per part: false alarms (an effect named on a no-effect case) and ``unexplained`` on no-effect
 cases; the named-in-library rate (the reported set holds the library's name of the true effect)
 with the median magnitude error of those; for out-of-library effects the rate of ``unexplained``
-or a derivative-level candidate (``pitch_damping``, ``iyy_shift``: the nearest derivative change)
+or a derivative-level candidate (:mod:`ornitail.gap.derivative_candidates`: the nearest derivative
+change)
 rather than a wrong measurement effect; and for named effects how often a fresh flight's closure
 (another noise and gust seed; the diagnosis' model and channel weights) lies inside the reported
 90 % interval (semi-real: one record, no fresh flight).
@@ -46,7 +47,15 @@ from ornitail.gap.flight_diagnosis import (
 )
 from ornitail.gap.model_spec import read_baseline_spec
 
-DERIVATIVE_LEVEL = ("pitch_damping", "iyy_shift")
+DERIVATIVE_LEVEL = (
+    "pitch_damping",
+    "static_stability",
+    "speed_stability",
+    "heave_damping",
+    "control_power",
+    "iyy_shift",
+    "heave_added_mass",
+)
 SEMI_REAL_CASES = (
     semi_real.InjectedCase(None),
     semi_real.InjectedCase("elevator_delay", 0.04),

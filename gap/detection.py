@@ -9,10 +9,11 @@ by absorbing noise and whatever systematic error the baseline leaves (its own li
 nonlinearity), without naming anything.
 
 A candidate is named (detected) when its validation closure exceeds the null's 95th percentile and
-the 5 % bootstrap quantile of its closure (resampling validation runs) exceeds the *lower-bound
-threshold*, the larger of the null's median and :data:`MATERIAL_CLOSURE`: it beats 95 % of
-meaningless parameters on the runs observed, and even in its unfavourable resamples it is better
-than a typical one and removes a material part of the gap. The materiality floor is there because
+its lower bound (resampling validation runs, simultaneous over the candidates that could have won:
+:mod:`ornitail.gap.ranking`) exceeds the *lower-bound threshold*, the larger of the null's median
+and :data:`MATERIAL_CLOSURE`: it beats 95 % of meaningless parameters on the runs observed, and
+even in its unfavourable resamples it is better than a typical one and removes a material part of
+the gap. The materiality floor is there because
 the null alone cannot tell a small real systematic error from an effect: on simulated flights
 without any withheld effect the physical candidates (a blend of ``cg_shift_with_x_h`` or
 ``wake_profile``) absorb the simulator's own linearisation error 1.2-2 times better than random
@@ -21,7 +22,9 @@ flights tried (docs/gap-diagnosis.md). The floor applies to the lower bound, not
 itself, because the closure compared is the best of several candidates on the same validation runs
 (the winner of a contest is lucky on the runs that chose it): an effect-free simulated flight's best
 candidate closed 0.115 on its validation runs (5 % quantile 0.086), 0.076 on its test runs and 0.059
-on a fresh flight, and was named under the floor on the closure alone.
+on a fresh flight, and was named under the floor on the closure alone. With the derivative-level
+candidates in the library (15 candidates for the simulator) a candidate's own 5 % quantile no longer
+accounted for the luck of the contest: the simultaneous bound does.
 """
 
 from __future__ import annotations
@@ -54,7 +57,7 @@ class DetectionRule:
 
     @property
     def lower_bound_threshold(self) -> float:
-        """What the 5 % bootstrap quantile of the closure must exceed: the null's median or the
+        """What the closure's simultaneous lower bound must exceed: the null's median or the
         materiality floor, whichever is larger (dimensionless)."""
         return max(self.median, MATERIAL_CLOSURE)
 
@@ -64,7 +67,7 @@ class DetectionRule:
         return float(np.median(self.closures))
 
     def detects(self, closure: float, lower_bound: float) -> bool:
-        """A validation ``closure`` with bootstrap 5 % quantile ``lower_bound`` is an effect."""
+        """A validation ``closure`` with (simultaneous) lower bound ``lower_bound`` is an effect."""
         return bool(closure > self.threshold and lower_bound > self.lower_bound_threshold)
 
     def as_report(self) -> dict[str, object]:

@@ -12,10 +12,10 @@ Simulator effects (only when the baseline is the simulator with that effect swit
 Low-order augmentations of any linear model, each only where the model has what it acts on
 (otherwise it is skipped, and the report says why: :attr:`CandidateLibrary.skipped`):
 
-- ``iyy_shift``: pitch inertia times (1 + k): the simulator's q-row of A and B divided by
-  (1 + k); a model file's constant ``Iyy`` times (1 + k);
-- ``pitch_damping``: M_q changed by k (N m s/rad for the simulator; a model file's parameter
-  ``Mq``, in its unit);
+- derivative level (:mod:`ornitail.gap.derivative_candidates`): ``pitch_damping``,
+  ``static_stability``, ``speed_stability``, ``heave_damping`` and ``control_power`` (M_q, M_w,
+  M_u, Z_w, M_de changed by k), ``iyy_shift`` (pitch inertia times 1 + k) and
+  ``heave_added_mass`` (heave inertia times 1 + k);
 - ``input_delay``, ``input_filter``: an input (each one not held constant by the model file)
   acts k seconds after it is logged, or is logged through a first-order low-pass of time
   constant k (s); with one such input the names are plain, with several they end in
@@ -31,7 +31,7 @@ the rigid-body equations): the data cannot tell them apart, and the ranking repo
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import lru_cache
 
@@ -39,8 +39,8 @@ import numpy as np
 
 from ornitail.core.errors import UserInputError
 from ornitail.flight.model_file import StateSpaceModelSpec, load_model
-from ornitail.gap.flight_data import MODEL_UNIT
-from ornitail.gap.flight_model import LinearFlightModel
+from ornitail.gap.derivative_candidates import model_derivatives, simulator_derivatives
+from ornitail.gap.flight_model import FlightCandidate, LinearFlightModel
 from ornitail.gap.model_spec import BaselineSpec
 from ornitail.sim.configuration import VehicleConfiguration, study_configuration
 from ornitail.sim.dynamics import TrimNotFoundError, linearise
@@ -51,17 +51,6 @@ SIMULATOR_BLENDS = ("wake_profile", "cg_shift_with_x_h", "day_to_day_drift")
 DELAY_BOUNDS_S = (-0.1, 0.25)
 FILTER_BOUNDS_S = (0.0, 0.25)
 BIAS_RANGE_SPREADS = 3.0  # an output bias may reach 3 x the output's spread over the runs
-
-
-@dataclass(frozen=True)
-class FlightCandidate:
-    """One candidate effect: ``build(k)`` is the model with the effect at magnitude ``k``."""
-
-    name: str
-    description: str
-    unit: str
-    bounds: tuple[float, float]
-    build: Callable[[float], LinearFlightModel]
 
 
 @dataclass(frozen=True)
@@ -81,6 +70,7 @@ def _simulator_model(configuration: VehicleConfiguration, effects: EffectSet) ->
         a_matrix=linear.a_matrix,
         b_matrix=linear.b_matrix,
         iyy_kg_m2=linear.iyy_kg_m2,
+        mass_kg=linear.mass_kg,
         theta0_rad=linear.trim.theta_rad,
         airspeed_m_s=linear.trim.airspeed_m_s,
     )
@@ -142,6 +132,7 @@ def baseline_flight_model(
     return LinearFlightModel(
         **_from_state_space(model, model.start_values(), constants),
         iyy_kg_m2=float(constants.get("Iyy", math.nan)),
+        mass_kg=float(constants.get("m", math.nan)),
         theta0_rad=float(constants.get("theta0", math.nan)),
         airspeed_m_s=airspeed,
         input_hold=model.input_hold,
@@ -200,82 +191,20 @@ def _simulator_candidates(spec: BaselineSpec, baseline: LinearFlightModel) -> li
     return candidates
 
 
-def _simulator_inertia(baseline: LinearFlightModel) -> list[FlightCandidate]:
-    """``iyy_shift`` and ``pitch_damping`` on the simulator's q-row (state 0)."""
-
-    def iyy_shift(k: float) -> LinearFlightModel:
-        a_matrix, b_matrix = baseline.a_matrix.copy(), baseline.b_matrix.copy()
-        a_matrix[0] /= 1.0 + k
-        b_matrix[0] /= 1.0 + k
-        return baseline.with_matrices(a_matrix, b_matrix)
-
-    inertia = baseline.iyy_kg_m2
-    damping_range = 3.0 * abs(baseline.a_matrix[0, 0]) * inertia + 1e-12
-
-    def pitch_damping(k: float) -> LinearFlightModel:
-        a_matrix = baseline.a_matrix.copy()
-        a_matrix[0, 0] += k / inertia
-        return baseline.with_matrices(a_matrix, baseline.b_matrix)
-
-    return [
-        FlightCandidate(
-            "iyy_shift", "pitch inertia times (1 + k)", "fraction", (-0.5, 2.0), iyy_shift
-        ),
-        FlightCandidate(
-            "pitch_damping",
-            "M_q changed by k",
-            "N m s/rad",
-            (-damping_range, damping_range),
-            pitch_damping,
-        ),
-    ]
-
-
-def _model_inertia(
+def _model_derivatives(
     spec: BaselineSpec, baseline: LinearFlightModel, data_constants: Mapping[str, float] | None
 ) -> tuple[list[FlightCandidate], dict[str, str]]:
-    """``iyy_shift`` on the model file's constant ``Iyy``, ``pitch_damping`` on its parameter
-    ``Mq``: each only when the file names it."""
+    """The derivative-level candidates of a model-file baseline
+    (:func:`ornitail.gap.derivative_candidates.model_derivatives`)."""
     model = load_model(spec.model)
     constants = model_constants(spec, data_constants)
-    values = model.start_values()
 
     def rebuilt(
         new_values: Mapping[str, float], new_constants: Mapping[str, float]
     ) -> LinearFlightModel:
         return replace(baseline, **_from_state_space(model, new_values, new_constants))
 
-    candidates, skipped = [], {}
-    if "Iyy" in constants:
-        candidates.append(
-            FlightCandidate(
-                "iyy_shift",
-                "constant Iyy times (1 + k)",
-                "fraction",
-                (-0.5, 2.0),
-                lru_cache(maxsize=256)(
-                    lambda k: rebuilt(values, {**constants, "Iyy": constants["Iyy"] * (1 + k)})
-                ),
-            )
-        )
-    else:
-        skipped["iyy_shift"] = f"{model.name} declares no constant Iyy (pitch inertia)"
-    if "Mq" in model.parameter_names:
-        damping_range = 3.0 * abs(values["Mq"]) + 1e-12
-        candidates.append(
-            FlightCandidate(
-                "pitch_damping",
-                "parameter Mq changed by k",
-                model.parameter("Mq").unit or MODEL_UNIT,
-                (-damping_range, damping_range),
-                lru_cache(maxsize=256)(
-                    lambda k: rebuilt({**values, "Mq": values["Mq"] + k}, constants)
-                ),
-            )
-        )
-    else:
-        skipped["pitch_damping"] = f"{model.name} has no parameter Mq (pitch damping)"
-    return candidates, skipped
+    return model_derivatives(model, constants, baseline, rebuilt)
 
 
 def _input_candidates(baseline: LinearFlightModel, varying: Sequence[int]) -> list[FlightCandidate]:
@@ -360,10 +289,10 @@ def flight_candidates(
     absolute = absolute_outputs if absolute_outputs is not None else (False,) * outputs
     spreads = output_spreads if output_spreads is not None else (0.0,) * outputs
     if spec.kind == "simulator":
-        library, skipped = _simulator_candidates(spec, baseline), {}
-        library += _simulator_inertia(baseline)
+        derivatives, skipped = simulator_derivatives(baseline)
+        library = _simulator_candidates(spec, baseline) + derivatives
     else:
-        library, skipped = _model_inertia(spec, baseline, data_constants)
+        library, skipped = _model_derivatives(spec, baseline, data_constants)
     library += _input_candidates(baseline, varying_inputs)
     measured, measured_skipped = _output_candidates(baseline, absolute, spreads)
     library += measured

@@ -23,7 +23,8 @@ the measured initial state, which is corrected before the motion starts.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 
@@ -42,7 +43,7 @@ def _zeros(count: int) -> tuple[float, ...]:
 class LinearFlightModel:
     """A, B, C, D of the model, its names, the pitch inertia it uses and its trim.
 
-    ``iyy_kg_m2`` is NaN when the model does not declare it; ``theta0_rad`` and ``airspeed_m_s``
+    ``iyy_kg_m2`` and ``mass_kg`` are NaN when the model does not declare them; ``theta0_rad`` and ``airspeed_m_s``
     are the model's steady state (NaN when unknown). ``c_matrix``/``d_matrix`` None mean C = I,
     D = 0. ``dynamic_rows`` are the state equations with free coefficients (the detection rule's
     random directions act there; a kinematic row such as theta' = q is left alone). The
@@ -54,6 +55,7 @@ class LinearFlightModel:
     iyy_kg_m2: float
     theta0_rad: float
     airspeed_m_s: float
+    mass_kg: float = math.nan
     input_hold: str = "first_order"
     c_matrix: np.ndarray | None = None
     d_matrix: np.ndarray | None = None
@@ -100,6 +102,18 @@ class LinearFlightModel:
         if self.d_matrix is None:
             return np.zeros((len(self.output_names), self.b_matrix.shape[1]))
         return self.d_matrix
+
+
+@dataclass(frozen=True)
+class FlightCandidate:
+    """One candidate effect: ``build(k)`` is the model with the effect at magnitude ``k`` (in
+    ``unit``, within ``bounds``); ``build(0)`` is the baseline."""
+
+    name: str
+    description: str
+    unit: str
+    bounds: tuple[float, float]
+    build: Callable[[float], LinearFlightModel]
 
 
 def _add(

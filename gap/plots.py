@@ -101,9 +101,9 @@ def localisation_picture(where: dict[str, Any], folder: Path) -> list[str]:
 
 
 def ranking_figure(report: dict[str, Any]) -> plt.Figure:
-    """Validation closure (-) of each candidate with its 90 % interval; the top set highlighted; the
-    detection rule's two lines: the closure must pass the dashed one, the interval's lower end the
-    dotted one."""
+    """Validation closure (-) of each candidate with its 90 % interval and its simultaneous lower
+    bound (black tick); the top set highlighted; the detection rule's two lines: the closure must
+    pass the dashed one, the simultaneous lower bound the dotted one."""
     ranking = report["ranking"]
     figure, axis = plt.subplots(figsize=(7, 0.45 * len(ranking) + 1.2))
     positions = np.arange(len(ranking))[::-1]
@@ -116,6 +116,15 @@ def ranking_figure(report: dict[str, Any]) -> plt.Figure:
     ).T
     colours = ["tab:red" if entry["in_top_set"] else "tab:gray" for entry in ranking]
     axis.barh(positions, values, xerr=errors, color=colours)
+    axis.scatter(
+        [entry["simultaneous_lower_bound"] for entry in ranking],
+        positions,
+        marker="|",
+        s=160,
+        color="black",
+        zorder=3,
+        label="lower bound, simultaneous over the contenders",
+    )
     axis.set_yticks(positions, [entry["name"] for entry in ranking])
     axis.axvline(0.0, color="black", linewidth=0.8)
     rule = report["detection_rule"]
@@ -124,7 +133,7 @@ def ranking_figure(report: dict[str, Any]) -> plt.Figure:
         (
             "lower_bound_threshold",
             ":",
-            "interval's lower end must exceed (null median or materiality floor)",
+            "lower bound must exceed (null median or materiality floor)",
         ),
     ):
         axis.axvline(rule[key], color="tab:blue", linestyle=style, linewidth=0.9, label=label)

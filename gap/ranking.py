@@ -13,7 +13,19 @@ Tied with the best: the best candidate's closure exceeds the other's in fewer th
 :data:`SEPARATION_PROBABILITY` of the bootstrap resamples of the validation runs, or the two
 closures differ by less than :data:`IDENTICAL_CLOSURE` (the same model family, e.g. added mass and
 I_yy). An effect is *detected* when the calibrated rule (:mod:`ornitail.gap.detection`) accepts the
-best validation closure and its bootstrap 5 % quantile.
+best validation closure and its *simultaneous lower bound*.
+
+Simultaneous lower bound: the best of several candidates on the same validation runs is the one those
+runs flattered most (the winner's curse), so its own 5 % bootstrap quantile is too high a bound. Each
+candidate's bound is instead its closure minus t times its bootstrap standard deviation, with t the
+95th percentile over resamples of the largest standardised shortfall max_j (c_j - c*_j) / s_j (c_j
+the observed closure, c*_j a resample's, s_j their standard deviation) over the *contenders*: the
+candidates whose 95 % resample quantile reaches the best closure, the ones these runs could have
+made the winner. Their bounds hold together in 95 % of resamples, whichever of them wins (a
+max-statistic bootstrap as in Romano and Wolf's step-down tests; leaving out candidates that could
+not have won follows Hansen's test for superior predictive ability, which drops alternatives far
+below the best so that they do not widen the bound). With one contender it is that candidate's 5 %
+quantile of the percentile bootstrap, the bound used before.
 """
 
 from __future__ import annotations
@@ -27,6 +39,7 @@ from ornitail.gap.magnitude_fit import bound_side
 
 BOOTSTRAP_RESAMPLES = 1000
 SEPARATION_PROBABILITY = 0.95
+SIMULTANEOUS_LEVEL = 0.05  # the lower bounds fail together in 5 % of resamples
 IDENTICAL_CLOSURE = 0.005
 
 
@@ -60,6 +73,7 @@ class RankedEffect:
     at_bound: str | None
     heldout_closure: float
     closure_interval: tuple[float, float]
+    simultaneous_lower_bound: float
     training_closure: float
     probability_best: float
     input_correlation_drop: float
@@ -78,6 +92,21 @@ class Ranking:
 def _closures(base: np.ndarray, candidates: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         return 1.0 - np.sqrt(candidates / base[..., None])
+
+
+def _simultaneous_lower_bounds(observed: np.ndarray, resampled: np.ndarray) -> np.ndarray:
+    """Lower bounds (K,) that hold together for the contenders (module docstring) from the
+    observed closures (K,) and their resamples (B, K). A candidate whose closure does not vary over
+    the resamples keeps its closure and widens no other's."""
+    spread = resampled.std(axis=0)
+    varies = np.isfinite(spread) & (spread > 0)
+    best = np.max(observed)
+    contenders = varies & (np.quantile(resampled, 1.0 - SIMULTANEOUS_LEVEL, axis=0) >= best)
+    if not contenders.any():
+        return observed.copy()
+    shortfall = (observed[contenders] - resampled[:, contenders]) / spread[contenders]
+    width = float(np.quantile(np.max(shortfall, axis=1), 1.0 - SIMULTANEOUS_LEVEL))
+    return np.where(varies, observed - width * np.where(varies, spread, 0.0), observed)
 
 
 def _order_key(entry: RankedEffect) -> tuple[int, float, float]:
@@ -117,6 +146,7 @@ def rank_candidates(
             for index in range(len(evidence))
         ]
     )
+    lower_bounds = _simultaneous_lower_bounds(observed, resampled)
     entries = []
     for index, item in enumerate(evidence):
         low, high = np.quantile(resampled[:, index], [0.05, 0.95])
@@ -130,6 +160,7 @@ def rank_candidates(
                 at_bound=bound_side(item.magnitude, item.bounds),
                 heldout_closure=float(observed[index]),
                 closure_interval=(float(low), float(high)),
+                simultaneous_lower_bound=float(lower_bounds[index]),
                 training_closure=float(training_closure),
                 probability_best=float(np.mean(winners == index)),
                 input_correlation_drop=baseline_input_correlation - item.input_correlation,
@@ -141,7 +172,5 @@ def rank_candidates(
     top_set = tuple(entry.name for entry in entries if entry.in_top_set)
     top_indices = [index for index in range(len(evidence)) if tied[index]]
     confidence = float(np.mean(np.isin(winners, top_indices)))
-    detected = rule is not None and rule.detects(
-        float(observed[best]), float(np.quantile(resampled[:, best], 0.05))
-    )
+    detected = rule is not None and rule.detects(float(observed[best]), float(lower_bounds[best]))
     return Ranking(entries, top_set, confidence, detected)

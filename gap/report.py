@@ -104,6 +104,7 @@ def assemble_report(
                 "at_bound": entry.at_bound,
                 "validation_closure": entry.heldout_closure,
                 "closure_interval": list(entry.closure_interval),
+                "simultaneous_lower_bound": entry.simultaneous_lower_bound,
                 "training_closure": entry.training_closure,
                 "probability_best": entry.probability_best,
                 "input_correlation_drop": entry.input_correlation_drop,

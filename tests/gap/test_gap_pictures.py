@@ -2,6 +2,7 @@
 
 import json
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
@@ -35,7 +36,7 @@ def test_bar_charts_carry_axis_labels_with_units(flight_report):
     (axis,) = ranking_figure(report).axes
     assert axis.get_ylabel() == "candidate effect"
     assert axis.get_xlabel().endswith("(-)")
-    # the detection rule's two bars, dashed for the closure and dotted for the interval's lower end
+    # the detection rule's two bars, dashed for the closure and dotted for the lower bound
     rule = report["detection_rule"]
     bars = {
         line.get_linestyle(): line.get_xdata()[0]
@@ -43,6 +44,12 @@ def test_bar_charts_carry_axis_labels_with_units(flight_report):
         if line.get_label()[0] != "_"
     }
     assert bars == {"--": rule["threshold"], ":": rule["lower_bound_threshold"]}
+    # each candidate's simultaneous lower bound, the value held to the dotted bar, as a tick
+    (ticks,) = axis.collections[-1:]
+    np.testing.assert_allclose(
+        ticks.get_offsets()[:, 0],
+        [entry["simultaneous_lower_bound"] for entry in report["ranking"]],
+    )
 
 
 def test_a_diagnosis_in_a_log_ends_with_a_timestamped_progress_line(flight_report):

@@ -8,7 +8,7 @@ from independent_reality import RealityCase, fly, linearisation, trim, write_cas
 from ornitail.flight.flight_logs import read_flight_log
 from ornitail.flight.manoeuvres import REQUIRED_LOG_COLUMNS, cut_manoeuvres
 from ornitail.gap.flight_candidates import baseline_flight_model, flight_candidates
-from ornitail.gap.model_spec import read_baseline_spec
+from ornitail.gap.model_spec import BaselineSpec, read_baseline_spec
 
 
 def test_flapper_b_trims_and_its_linearisation_is_stable():
@@ -33,8 +33,12 @@ def test_its_log_and_model_file_are_read_like_any_campaign(tmp_path):
     # the file holds the linearisation as derivatives and constants: equal up to round-off
     np.testing.assert_allclose(baseline.a_matrix, a_matrix, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(baseline.b_matrix, b_matrix, rtol=1e-9, atol=1e-12)
-    names = {candidate.name for candidate in flight_candidates(spec, baseline).candidates}
-    assert names == {"iyy_shift", "pitch_damping", "input_delay", "input_filter", "theta_drift"}
+    library = flight_candidates(spec, baseline)
+    # written in the DelFly model's structure, it is offered the DelFly model's library
+    delfly = BaselineSpec("linear_model", model="delfly_longitudinal")
+    expected = flight_candidates(delfly, baseline_flight_model(delfly))
+    assert [c.name for c in library.candidates] == [c.name for c in expected.candidates]
+    assert {"static_stability", "heave_added_mass"} <= {c.name for c in library.candidates}
 
 
 def test_a_logged_delay_leads_the_deflection_by_its_size():

@@ -5,6 +5,7 @@ import pytest
 
 from ornitail.core.errors import UserInputError
 from ornitail.flight.model_file import load_model
+from ornitail.gap.derivative_candidates import MODEL_PARAMETERS
 from ornitail.gap.flight_candidates import baseline_flight_model, flight_candidates
 from ornitail.gap.model_spec import BaselineSpec, read_baseline_spec, write_baseline_spec
 
@@ -57,7 +58,15 @@ def test_linear_model_baseline_uses_the_file_and_only_augmentations(tmp_path):
     assert baseline.iyy_kg_m2 == pytest.approx(1.35066e-4)
     library = flight_candidates(spec, baseline)
     names = {candidate.name for candidate in library.candidates}
-    assert names == {"iyy_shift", "pitch_damping", "input_delay", "input_filter", "theta_drift"}
+    # every derivative-level candidate: the file names Mq, Mw, Mu, Zw, Mde, Iyy and a state w
+    assert names == {
+        "iyy_shift",
+        "heave_added_mass",
+        *MODEL_PARAMETERS,
+        "input_delay",
+        "input_filter",
+        "theta_drift",
+    }
     # manoeuvre deviations by default: constant sensor offsets cancel, so no bias candidates
     assert set(library.skipped) == {"q_bias", "u_bias", "w_bias", "theta_bias"}
 

@@ -31,8 +31,11 @@ def test_injected_effect_is_named_with_its_magnitude(case, tmp_path, model_file)
     report = _report(case, tmp_path, model_file, refit=refit)
     assert report["split"]["runs_cut_into"] == "segments of 0.5 s"
     assert set(report["gap_before"]["per_channel"]) == {"alpha", "q", "a_z"}
-    # the model names no Iyy and has no theta output: those augmentations are skipped, by reason
-    assert set(report["candidates_skipped"]) == {"iyy_shift", "theta_drift"}
+    # the model names no Iyy, no Mu, no state w and no output theta: those augmentations are
+    # skipped, by reason (its Ma, Za, Mq and Mde carry the derivative-level candidates)
+    skipped = report["candidates_skipped"]
+    assert set(skipped) == {"iyy_shift", "speed_stability", "heave_added_mass", "theta_drift"}
+    assert "Mu" in skipped["speed_stability"] and "state w" in skipped["heave_added_mass"]
     name, magnitude = case.expected
     if name is None:
         assert report["verdict"] == "none"  # the record the baseline was identified on
