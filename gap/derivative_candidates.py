@@ -53,7 +53,7 @@ SIMULATOR_ENTRIES: dict[str, tuple[str, str, int, int, str]] = {
 (states q, u, w, theta; an M-row entry is the derivative over I_yy, a Z-row entry over m)."""
 
 
-def row_inertia(
+def _row_inertia(
     baseline: LinearFlightModel, name: str, state: str, description: str
 ) -> FlightCandidate:
     """``state``'s row of A and B divided by (1 + k): that equation's inertia times (1 + k)."""
@@ -79,7 +79,7 @@ def _heave_added_mass(
 ) -> tuple[list[FlightCandidate], dict[str, str]]:
     if "w" not in baseline.state_names:
         return [], {"heave_added_mass": "the model has no state w (heave velocity)"}
-    candidate = row_inertia(
+    candidate = _row_inertia(
         baseline, "heave_added_mass", "w", "heave added mass: the w-row of A and B / (1 + k)"
     )
     return [candidate], {}
@@ -91,7 +91,7 @@ def simulator_derivatives(
     """Derivative-level candidates on the simulator's linearisation (module table)."""
     scales = {"M": baseline.iyy_kg_m2, "Z": baseline.mass_kg}
     candidates = [
-        row_inertia(baseline, "iyy_shift", "q", "pitch inertia: the q-row of A and B / (1 + k)")
+        _row_inertia(baseline, "iyy_shift", "q", "pitch inertia: the q-row of A and B / (1 + k)")
     ]
     skipped = {}
     for name, (derivative, matrix, row, column, unit) in SIMULATOR_ENTRIES.items():

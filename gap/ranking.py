@@ -106,7 +106,7 @@ def _simultaneous_lower_bounds(observed: np.ndarray, resampled: np.ndarray) -> n
         return observed.copy()
     shortfall = (observed[contenders] - resampled[:, contenders]) / spread[contenders]
     width = float(np.quantile(np.max(shortfall, axis=1), 1.0 - SIMULTANEOUS_LEVEL))
-    return np.where(varies, observed - width * np.where(varies, spread, 0.0), observed)
+    return observed - width * np.where(varies, spread, 0.0)
 
 
 def _order_key(entry: RankedEffect) -> tuple[int, float, float]:
