@@ -74,26 +74,33 @@ def _closure(before_sse: np.ndarray, after_sse: np.ndarray) -> float:
         return float(1.0 - np.sqrt(after_sse.sum() / before_sse.sum()))
 
 
-def _closure_and_standard_error(
+def closures_and_standard_errors(
     weights: np.ndarray, before_sse: np.ndarray, after_sse: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Closure and its delta-method standard error for each row of run ``weights`` (counts).
+    """Closure and its delta-method standard error for each row of run ``weights`` (B, runs
+    counts) and each candidate (``after_sse`` (runs,) for one, giving (B,); (K, runs) for K,
+    giving (B, K)).
 
     With A and B the weighted sums of after and before and r = sqrt(A / B), run i's influence on
     the closure 1 - r is -(r / 2) n (a_i / A - b_i / B); the standard error is the influences'
     weighted standard deviation over sqrt(n) (n = the row's total count).
     """
-    runs = weights.sum(axis=1)
+    after_rows = np.atleast_2d(after_sse)  # (K, R)
+    runs = weights.sum(axis=1)[:, None]  # (B, 1)
     with np.errstate(divide="ignore", invalid="ignore"):
-        after = weights @ after_sse
-        before = weights @ before_sse
+        after = weights @ after_rows.T  # (B, K)
+        before = (weights @ before_sse)[:, None]  # (B, 1)
         ratio = np.sqrt(after / before)
-        influence = -(ratio * runs / 2)[:, None] * (
-            after_sse[None, :] / after[:, None] - before_sse[None, :] / before[:, None]
-        )
-        mean = (weights * influence).sum(axis=1) / runs
-        variance = (weights * (influence - mean[:, None]) ** 2).sum(axis=1) / runs
-        return 1.0 - ratio, np.sqrt(variance / runs)
+        influence = -(ratio * runs / 2)[:, :, None] * (
+            after_rows[None, :, :] / after[:, :, None] - (before_sse[None, :] / before)[:, None, :]
+        )  # (B, K, R)
+        counts = weights[:, None, :]
+        mean = (counts * influence).sum(axis=2) / runs
+        variance = (counts * (influence - mean[:, :, None]) ** 2).sum(axis=2) / runs
+        closure, error = 1.0 - ratio, np.sqrt(variance / runs)
+    if np.ndim(after_sse) == 1:
+        return closure[:, 0], error[:, 0]
+    return closure, error
 
 
 def fresh_data_interval(
@@ -104,7 +111,7 @@ def fresh_data_interval(
 
     A studentised bootstrap of the prediction (bootstrap-t): the pivot is the difference between a
     fresh flight's closure and this one's, in units of this flight's standard error s (delta
-    method, :func:`_closure_and_standard_error`) times sqrt(1 + n / m). Its distribution is read off
+    method, :func:`closures_and_standard_errors`) times sqrt(1 + n / m). Its distribution is read off
     pairs of independent resamples of the runs, one of n runs playing these runs (with its own
     standard error) and one of m runs playing the fresh flight; the interval is the closure plus
     the pivot's 5 and 95 % quantiles times s sqrt(1 + n / m) sqrt(n / (n - 1)) (the last factor
@@ -127,14 +134,14 @@ def fresh_data_interval(
     runs = len(before_sse)
     fresh = runs if fresh_runs is None else fresh_runs
     observed = _closure(before_sse, after_sse)
-    _, (error,) = _closure_and_standard_error(np.ones((1, runs)), before_sse, after_sse)
-    these, these_error = _closure_and_standard_error(
+    _, (error,) = closures_and_standard_errors(np.ones((1, runs)), before_sse, after_sse)
+    these, these_error = closures_and_standard_errors(
         _resample_weights(runs, seed), before_sse, after_sse
     )
     new = np.random.default_rng([seed, 1]).multinomial(
         fresh, np.full(runs, 1.0 / runs), size=RESAMPLES
     )
-    fresh_closure, _ = _closure_and_standard_error(new, before_sse, after_sse)
+    fresh_closure, _ = closures_and_standard_errors(new, before_sse, after_sse)
     scale = np.sqrt(1.0 + runs / fresh)
     with np.errstate(divide="ignore", invalid="ignore"):
         pivot = (fresh_closure - these) / (these_error * scale)

@@ -54,7 +54,7 @@ def render_report(report: dict[str, Any]) -> str:
         f"split: {report['split']['method']}",
         f"detection rule: validation closure above {rule['threshold']:.3f}, the 95th percentile of "
         f"{rule['draws']} random one-parameter directions fitted the same way, and its lower bound "
-        "(bootstrap, simultaneous over the candidates that could have won) above "
+        "(studentised bootstrap, simultaneous over the candidates that could have won) above "
         f"{rule['lower_bound_threshold']:.3f}, the larger of their median "
         f"({rule['null_closures_median']:.3f}) and the materiality floor "
         f"{rule['materiality_floor']:.2f}",
@@ -81,13 +81,17 @@ def render_report(report: dict[str, Any]) -> str:
         lines.append("effect: none (no candidate closes a significant part of the gap)")
     lines.append("where:")
     lines += [f"  {sentence}" for sentence in report["where"]["summary"]]
-    lines.append("ranking (closure on validation runs, 90 % interval; closure on training runs):")
+    lines.append(
+        "ranking (closure on validation runs, 90 % interval, simultaneous lower bound; closure on "
+        "training runs):"
+    )
     for entry in report["ranking"]:
         low, high = entry["closure_interval"]
         mark = "*" if entry["in_top_set"] else " "
         lines.append(
             f" {mark}{entry['name']:28s} {entry['validation_closure']:+.3f} "
-            f"[{low:+.3f}, {high:+.3f}]  training {entry['training_closure']:+.3f}  k = "
+            f"[{low:+.3f}, {high:+.3f}] >= {entry['simultaneous_lower_bound']:+.3f}  "
+            f"training {entry['training_closure']:+.3f}  k = "
             f"{magnitude_text({'value': entry['magnitude'], 'unit': entry['unit'], 'at_bound': entry['at_bound']})}"
             f"  P(best) {entry['probability_best']:.2f}"
         )

@@ -116,7 +116,11 @@ def test_a_drift_beyond_the_candidates_range_is_reported_as_at_least_its_bound(t
     assert report["best_candidate"] == "theta_drift"
     assert report["magnitude"]["at_bound"] == "upper"
     assert report["magnitude"]["value"] == pytest.approx(0.05, abs=1e-3)
-    assert "at least 0.05 rad/s (at the edge of the range)" in render_report(report)
+    text = render_report(report)
+    assert "at least 0.05 rad/s (at the edge of the range)" in text
+    # each ranked candidate's line carries its simultaneous lower bound, the value the rule holds
+    for entry in report["ranking"]:
+        assert f">= {entry['simultaneous_lower_bound']:+.3f}" in text
 
 
 def test_a_second_effect_is_found_on_top_of_the_first(tmp_path):
