@@ -91,11 +91,14 @@ def fresh_flight_closure(case: WithheldCase, diagnosis: FlightDiagnosis, folder:
     return 1.0 - float(np.sqrt(energy(diagnosis.chosen) / energy(diagnosis.baseline)))
 
 
-def run_case(case: WithheldCase, folder: Path, seed: int) -> dict[str, object]:
+def run_case(
+    case: WithheldCase, folder: Path, seed: int, validation: str = "first-fold"
+) -> dict[str, object]:
     """Fly, write, diagnose blind, and score one case (and, when an effect is named, its closure
     on a fresh flight of the same case against the reported intervals)."""
     log_path = write_flight_log_csv(simulate_withheld_log(case), folder / "flight.csv")
-    spec_path = write_baseline_spec(case.baseline_spec(), folder / "baseline.toml")
+    spec = dataclasses.replace(case.baseline_spec(), validation=validation)
+    spec_path = write_baseline_spec(spec, folder / "baseline.toml")
     diagnosis = diagnose_flight(read_baseline_spec(spec_path), [log_path], seed=seed)
     report = diagnosis.report
     truth = true_magnitudes(case)

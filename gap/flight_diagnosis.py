@@ -6,10 +6,12 @@
    segment and steady state (:mod:`ornitail.gap.flight_localisation`).
 3. Which: every candidate (:mod:`ornitail.gap.flight_candidates`) is fitted on the training
    manoeuvres and ranked on the validation ones (:mod:`ornitail.gap.ranking`); the detection rule
-   is calibrated on the same runs with random directions of the model (:func:`null_rule`).
+   is calibrated on the same runs with random directions of the model (:func:`null_energies`).
 4. How far: gap before and after the chosen effect per channel on the test manoeuvres, each
    scored with the effect its own fold chose (on validation runs) and fitted (on training runs)
-   without it. Ranking, detection and verdict are the first fold's.
+   without it. Ranking, detection and verdict are the first fold's, or with
+   ``[baseline].validation = "all-folds"`` (not yet the default) every fold's validation runs
+   pooled (:mod:`ornitail.gap.pooled_validation`).
 
 Fits, ranking and the gap before and after are weighted per channel by the inverse of the noise
 level: the standard deviation of the part of the baseline's training residual that does not repeat
@@ -61,6 +63,7 @@ from ornitail.gap.flight_model import LinearFlightModel, simulate_runs, superpos
 from ornitail.gap.intervals import closure_with_interval
 from ornitail.gap.magnitude_fit import fit_magnitude
 from ornitail.gap.model_spec import BaselineSpec
+from ornitail.gap.pooled_validation import FoldScores, pool_folds
 from ornitail.gap.ranking import CandidateEvidence, Ranking, rank_candidates
 from ornitail.gap.report import assemble_report, magnitude_field
 
@@ -205,20 +208,25 @@ def _fit_pair(
     return magnitudes[1], model
 
 
-def null_rule(
+NULL_METHOD = (
+    "validation closures of {draws} random one-parameter directions in the A and B entries "
+    "(dynamic rows, scaled per entry), fitted on the training runs like every candidate"
+)
+
+
+def null_energies(
     start: LinearFlightModel,
     training: Sequence[FlightRun],
     validation: Sequence[FlightRun],
     scales: np.ndarray,
     seed: int,
     draws: int = NULL_DRAWS,
-) -> DetectionRule:
-    """The detection rule calibrated around ``start`` (:mod:`ornitail.gap.detection`): ``draws``
-    random directions in A and B, each fitted on the ``training`` runs within
-    :data:`NULL_BOUNDS` and scored on the ``validation`` runs, channels divided by ``scales``
-    (SI per channel)."""
+) -> tuple[float, np.ndarray]:
+    """``start``'s weighted squared residual on the ``validation`` runs, and each of ``draws``
+    random directions' in A and B (:mod:`ornitail.gap.detection`) fitted on the ``training`` runs
+    within :data:`NULL_BOUNDS` (channels divided by ``scales``, SI per channel)."""
     start_sse = float(_channel_sse(residuals_of(start, validation), scales).sum())
-    closures = []
+    after = []
     for a_step, b_step in random_matrix_directions(
         start.a_matrix, start.b_matrix, draws, seed, start.dynamic_rows
     ):
@@ -227,32 +235,34 @@ def null_rule(
             return start.with_matrices(start.a_matrix + k * a_step, start.b_matrix + k * b_step)
 
         _, model = _fit(family, NULL_BOUNDS, training, scales)
-        after = float(_channel_sse(residuals_of(model, validation), scales).sum())
-        closures.append(closure_of(start_sse, after))
+        after.append(float(_channel_sse(residuals_of(model, validation), scales).sum()))
+    return start_sse, np.array(after)
+
+
+def rule_from_energies(start_sse: float, after_sse: np.ndarray) -> DetectionRule:
+    """The rule whose null closures are the directions' (``after_sse``) against ``start_sse``."""
     return DetectionRule(
-        f"validation closures of {draws} random one-parameter directions in the A and B entries "
-        "(dynamic rows, scaled per entry), fitted on the training runs like every candidate",
-        np.array(closures),
+        NULL_METHOD.format(draws=len(after_sse)),
+        np.array([closure_of(start_sse, after) for after in after_sse]),
     )
 
 
-def _score_library(
+def _library_scores(
     library: Sequence[FlightCandidate],
     start: LinearFlightModel,
     baseline: LinearFlightModel,
     split: _Split,
     first: tuple[FlightCandidate, float] | None = None,
     calibrate: bool = True,
-) -> tuple[Ranking, dict[str, LinearFlightModel], DetectionRule | None]:
-    """Fit every candidate on the training runs and rank them on the validation runs against
+) -> tuple[FoldScores, dict[str, LinearFlightModel]]:
+    """Fit every candidate on the training runs and score it on the validation runs against
     ``start``: alone (``first`` None, ``start`` = ``baseline``), or together with the ``first``
-    (candidate, magnitude) whose model is ``start``, both magnitudes refitted.
+    (candidate, magnitude) whose model is ``start``, both magnitudes refitted. With ``calibrate``
+    the null directions are fitted and scored too (else their energies are empty).
 
-    Returns the ranking, each candidate's model, and the detection rule calibrated around
-    ``start`` (without ``calibrate``: None, and nothing is detected; the ranking only chooses).
+    Returns the fold's scores and each candidate's model.
     """
     start_residuals = residuals_of(start, split.validation)
-    start_sse = _channel_sse(start_residuals, split.scales)
     evidence, fitted = [], {}
     for candidate in library:
         if first is None:
@@ -279,21 +289,40 @@ def _score_library(
                 bounds=candidate.bounds,
             )
         )
-    rule = (
-        null_rule(start, split.training, split.validation, split.scales, split.seed)
+    null_start, null_after = (
+        null_energies(start, split.training, split.validation, split.scales, split.seed)
         if calibrate
-        else None
+        else (0.0, np.zeros(0))
     )
-    ranking = rank_candidates(
-        evidence,
-        start_sse.sum(axis=1),
-        float(_channel_sse(residuals_of(start, split.training), split.scales).sum()),
-        _input_correlation(start_residuals, split.validation, split.reference_rms),
-        int(sum(run.outputs.size for run in split.training)),
-        split.seed,
+    scores = FoldScores(
+        evidence=evidence,
+        start_heldout_sse=_channel_sse(start_residuals, split.scales).sum(axis=1),
+        start_training_sse=float(
+            _channel_sse(residuals_of(start, split.training), split.scales).sum()
+        ),
+        start_input_correlation=_input_correlation(
+            start_residuals, split.validation, split.reference_rms
+        ),
+        training_count=int(sum(run.outputs.size for run in split.training)),
+        null_after_sse=null_after,
+        null_start_sse=null_start,
+    )
+    return scores, fitted
+
+
+def _rank(
+    scores: FoldScores, seed: int, rule: DetectionRule | None, studentised: bool = False
+) -> Ranking:
+    return rank_candidates(
+        scores.evidence,
+        scores.start_heldout_sse,
+        scores.start_training_sse,
+        scores.start_input_correlation,
+        scores.training_count,
+        seed,
         rule,
+        studentised,
     )
-    return ranking, fitted, rule
 
 
 def _second_effect(
@@ -342,6 +371,22 @@ def _fold(
     return _Split(training, validation, scales, reference_rms, seed), signal_scales
 
 
+def _split_field(splits: Sequence[RunSplit], count: int, pooled: bool) -> dict[str, object]:
+    """The report's ``split``; pooled, its training and validation counts are every fold's."""
+    field = nested_split_counts(list(splits), count) | {
+        "validation_design": "all-folds" if pooled else "first-fold"
+    }
+    if pooled:
+        field["training"] = sum(len(part.training) for part in splits)
+        field["validation"] = sum(len(part.validation) for part in splits)
+        field["method"] = field["method"].replace(
+            "ranking, detection rule and verdict from fold 1",
+            f"ranking, detection rule and verdict from every fold's validation runs pooled "
+            f"({field['validation']}; not yet the default), magnitudes from fold 1",
+        )
+    return field
+
+
 def read_record(spec: BaselineSpec, data_paths: Sequence[str | Path]) -> FlightRecord:
     """The runs of the logs as ``spec``'s baseline reads them: the simulator's four states, or the
     model file's signals (manoeuvres, or segments of ``spec.segment_s``)."""
@@ -383,9 +428,22 @@ def diagnose_flight(
         record.varying_inputs,
     )
     library = candidates.candidates
-    ranking, fitted, rule = _score_library(library, baseline, baseline, split)
-    step(1, f"fold 1 of {len(splits)}: library ranked")
-    chosen_model = fitted[ranking.entries[0].name]
+    # every fold fits and scores the library; the first fold's validation runs rank and calibrate
+    # the rule, or every fold's pooled (spec.validation, docs/gap-diagnosis.md)
+    pooled = spec.validation == "all-folds"
+    fold_scores, fold_models = [], []
+    for fold, part in enumerate(splits, start=1):
+        fold_split = split if fold == 1 else _fold(runs, part, baseline, seed)[0]
+        scores, models = _library_scores(
+            library, baseline, baseline, fold_split, calibrate=pooled or fold == 1
+        )
+        fold_scores.append(scores)
+        fold_models.append(models)
+        step(fold, f"fold {fold} of {len(splits)}: library fitted")
+    deciding = pool_folds(fold_scores) if pooled else fold_scores[0]
+    rule = rule_from_energies(deciding.null_start_sse, deciding.null_after_sse)
+    ranking = _rank(deciding, seed, rule, studentised=pooled)
+    chosen_model = fold_models[0][ranking.entries[0].name]
     first_test = [runs[i] for i in splits[0].test]
     second = None
     if ranking.detected:
@@ -393,20 +451,18 @@ def diagnose_flight(
         first = (next(c for c in library if c.name == top.name), top.magnitude)
         rest = [c for c in library if c.name not in ranking.top_set]
         if rest:
-            second = _score_library(rest, chosen_model, baseline, split, first)
-    step(2, "second effect")
-    # how far: every run is a test run once, scored with the effect chosen and fitted without it
-    after_residuals = dict(zip(splits[0].test, residuals_of(chosen_model, first_test), strict=True))
-    choices = {ranking.entries[0].name: 1}
-    for fold, part in enumerate(splits[1:], start=2):
-        fold_ranking, fold_fitted, _ = _score_library(
-            library, baseline, baseline, _fold(runs, part, baseline, seed)[0], calibrate=False
-        )
-        name = fold_ranking.entries[0].name
+            scores, models = _library_scores(rest, chosen_model, baseline, split, first)
+            second_rule = rule_from_energies(scores.null_start_sse, scores.null_after_sse)
+            second = (_rank(scores, seed, second_rule), models, second_rule)
+    step(len(splits) + 1, "second effect")
+    # how far: every run is a test run once, scored with the effect its own fold chose on its own
+    # validation runs (never with a choice its test runs took part in) and fitted without it
+    after_residuals, choices = {}, {}
+    for part, scores, models in zip(splits, fold_scores, fold_models, strict=True):
+        name = _rank(scores, seed, None).entries[0].name
         choices[name] = choices.get(name, 0) + 1
         test = [runs[i] for i in part.test]
-        after_residuals.update(zip(part.test, residuals_of(fold_fitted[name], test), strict=True))
-        step(fold + 1, f"fold {fold} of {len(splits)}: library ranked")
+        after_residuals.update(zip(part.test, residuals_of(models[name], test), strict=True))
     all_residuals = residuals_of(baseline, runs)
     where = localise_flight(runs, all_residuals, signal_scales, baseline)
     pointer = sparse_pointer(split.training, baseline)
@@ -418,7 +474,7 @@ def diagnose_flight(
         spec=spec,
         data_paths=data_paths,
         total_runs=len(runs),
-        split=nested_split_counts(splits, len(runs))
+        split=_split_field(splits, len(runs), pooled)
         | {"test_choices": choices, "runs_cut_into": record.cut},
         ranking=ranking,
         rule=rule,

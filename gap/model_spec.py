@@ -10,6 +10,7 @@ effects_off = ["added_mass"]    # simulator effects the baseline leaves out
 # candidates = ["added_mass", "input_delay"]   # optional: restrict the library
 # segment_s = 1.0               # linear_model: cut logs into segments of this many seconds
 # derivative_refit = true       # linear_model: also re-fit the model's own derivatives
+# validation = "all-folds"      # not yet the default: the rule on every fold's validation runs
 ```
 
 ``tail`` and ``x_h_mm`` are required for the simulator and optional for a model file (they then
@@ -30,6 +31,9 @@ from ornitail.sim.effects import EFFECT_NAMES
 from ornitail.vehicle.geometry import require_tail_position_mm, study_tail_geometry
 
 BASELINE_KINDS = ("simulator", "linear_model")
+VALIDATION_DESIGNS = ("first-fold", "all-folds")
+"""Which validation runs rank the candidates and calibrate the detection rule: the first fold's
+(the default), or every fold's pooled ("all-folds", not yet the default: docs/gap-diagnosis.md)."""
 
 
 @dataclass(frozen=True)
@@ -45,6 +49,7 @@ class BaselineSpec:
     source: str = "baseline"
     segment_s: float | None = None  # linear_model: logs cut into segments of this length (s)
     derivative_refit: bool = False  # linear_model: re-fit the model's derivatives too
+    validation: str = "first-fold"  # one of VALIDATION_DESIGNS
 
 
 def _names(table: TomlTable, key: str, known: tuple[str, ...] | None) -> tuple[str, ...]:
@@ -82,6 +87,7 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
             "candidates",
             "segment_s",
             "derivative_refit",
+            "validation",
         ),
     )
     kind = table.text("kind", choices=BASELINE_KINDS)
@@ -94,6 +100,7 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
         study_tail_geometry(tail, where=table.where("tail"))
     segment_s = table.number("segment_s", None, positive=True)
     refit = table.boolean("derivative_refit", False)
+    validation = table.text("validation", "first-fold", choices=VALIDATION_DESIGNS)
     for key, given in (("segment_s", segment_s is not None), ("derivative_refit", refit)):
         if given and kind != "linear_model":
             raise UserInputError(table.where(key), "only for kind = linear_model (a model file)")
@@ -110,6 +117,7 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
         x_h_mm=math.nan if x_h_mm is None else x_h_mm,
         segment_s=segment_s,
         derivative_refit=refit,
+        validation=validation,
         effects_off=_names(table, "effects_off", EFFECT_NAMES),
         model=model,
         candidates=_names(table, "candidates", None),
@@ -129,6 +137,8 @@ def write_baseline_spec(spec: BaselineSpec, path: str | Path) -> Path:
         lines.append(f"segment_s = {spec.segment_s:g}")
     if spec.derivative_refit:
         lines.append("derivative_refit = true")
+    if spec.validation != "first-fold":
+        lines.append(f'validation = "{spec.validation}"')
     if spec.model:
         lines.append(f'model = "{spec.model}"')
     if spec.candidates:

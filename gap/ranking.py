@@ -16,27 +16,28 @@ I_yy). An effect is *detected* when the calibrated rule (:mod:`ornitail.gap.dete
 best validation closure and its *simultaneous lower bound*.
 
 Simultaneous lower bound: the best of several candidates on the same validation runs is the one those
-runs flattered most (the winner's curse), so its own 5 % bootstrap quantile is too high a bound. The
-bound is built in two steps (Romano, Shaikh and Wolf's two-step method for moment inequalities):
-1. the *contenders*, the candidates these runs could have made the winner: those whose 99.5 % resample
-   quantile (:data:`CONTENDER_LEVEL`) reaches the best closure. Candidates far below are left out so
-   that they do not widen the bound (the idea of Hansen's test for superior predictive ability);
-2. a studentised max-statistic bootstrap over them (Romano and Wolf): in each resample of the runs,
-   each contender's shortfall (c*_j - c_j) / s*_j (c_j the observed closure, c*_j the resample's,
-   s*_j the resample's own delta-method standard error, :func:`closures_and_standard_errors`), and
-   t, the 95.5 % quantile of the largest of them (5 % less the 0.5 % the first step may cost).
-Each candidate's bound is c_j - t s_j, with s_j its standard error on the observed runs; the
-contenders' bounds hold together in about 95 % of flights, whichever of them wins. Studentising each
-resample carries the skew of few, heavy-tailed runs, which the percentile bootstrap misses (its 5 %
-quantile of one candidate covers 0.89 on 16 skewed runs, the studentised bound 0.94).
+runs flattered most (the winner's curse), so its own 5 % bootstrap quantile is too high a bound. Each
+candidate's bound is instead its closure minus t times its bootstrap standard deviation, with t the
+95th percentile over resamples of the largest standardised shortfall max_j (c_j - c*_j) / s_j (c_j
+the observed closure, c*_j a resample's, s_j their standard deviation) over the *contenders*: the
+candidates whose 95 % resample quantile reaches the best closure, the ones these runs could have
+made the winner. Their bounds hold together in 95 % of resamples, whichever of them wins (a
+max-statistic bootstrap as in Romano and Wolf's step-down tests; leaving out candidates that could
+not have won follows Hansen's test for superior predictive ability, which drops alternatives far
+below the best so that they do not widen the bound). With one contender it is that candidate's 5 %
+quantile of the percentile bootstrap, the bound used before.
 
-No bound lies below the candidate's worst single validation run: a ratio of sums over runs lies
-between its runs' ratios, so a flight of runs like these closes at least that much. It matters with
-few runs (a 16-run flight's first fold validates on 4): there the studentised quantile is dominated
-by resamples of one or two runs whose standard error is near zero (with 3 runs or fewer it is
-infinite), and the bound would say nothing. The floor is itself the best of the runs' luck: with 4
-runs and 8 equally good candidates the winner's bound covers only 0.48 of draws (0.87 alone); the
-few-run limit in docs/gap-diagnosis.md.
+With validation pooled over the folds (``[baseline].validation = "all-folds"``, not yet the default)
+the rule has 12-20 runs, and the bound is instead studentised per resample, in two steps (after
+Romano, Shaikh and Wolf's two-step method for moment inequalities): the contenders are those whose
+99.5 % resample quantile (:data:`CONTENDER_LEVEL`) reaches the best closure; t is the 95.5 % quantile
+over resamples of the largest (c*_j - c_j) / s*_j over them, s*_j the resample's own delta-method
+standard error (:func:`closures_and_standard_errors`); each bound is c_j - t s_j, and none lies below
+the candidate's worst single run. On 16 skewed runs it covers 0.92 among 8 equally good candidates
+and 0.94 alone, where the percentile bound gives 0.63 and 0.89; on 4 runs (the first fold's
+validation runs of a 16-manoeuvre flight) no bootstrap is reliable: the studentised quantile is
+ruled by resamples of one or two runs whose standard error is near zero
+(docs/gap-diagnosis.md, *Simultaneous lower bound*).
 """
 
 from __future__ import annotations
@@ -52,7 +53,9 @@ from ornitail.gap.magnitude_fit import bound_side
 BOOTSTRAP_RESAMPLES = 1000
 SEPARATION_PROBABILITY = 0.95
 SIMULTANEOUS_LEVEL = 0.05  # the lower bounds fail together in 5 % of resamples
-CONTENDER_LEVEL = 0.005  # of which the first step (who could have won) may spend this much
+CONTENDER_LEVEL = (
+    0.005  # the studentised bound's first step (who could have won) may spend this much
+)
 IDENTICAL_CLOSURE = 0.005
 
 
@@ -107,24 +110,36 @@ def _closures(base: np.ndarray, candidates: np.ndarray) -> np.ndarray:
         return 1.0 - np.sqrt(candidates / base[..., None])
 
 
-def _simultaneous_lower_bounds(
+def _simultaneous_lower_bounds(observed: np.ndarray, resampled: np.ndarray) -> np.ndarray:
+    """Lower bounds (K,) that hold together for the contenders (module docstring) from the
+    observed closures (K,) and their resamples (B, K). A candidate whose closure does not vary over
+    the resamples keeps its closure and widens no other's."""
+    spread = resampled.std(axis=0)
+    varies = np.isfinite(spread) & (spread > 0)
+    best = np.max(observed)
+    contenders = varies & (np.quantile(resampled, 1.0 - SIMULTANEOUS_LEVEL, axis=0) >= best)
+    if not contenders.any():
+        return observed.copy()
+    shortfall = (observed[contenders] - resampled[:, contenders]) / spread[contenders]
+    width = float(np.quantile(np.max(shortfall, axis=1), 1.0 - SIMULTANEOUS_LEVEL))
+    return observed - width * np.where(varies, spread, 0.0)
+
+
+def _studentised_simultaneous_lower_bounds(
     baseline_sse: np.ndarray,
     heldout_sse: np.ndarray,
     weights: np.ndarray,
     observed: np.ndarray,
     resampled: np.ndarray,
 ) -> np.ndarray:
-    """Lower bounds (K,) that hold together for the contenders (module docstring), from the
-    per-run energies (``baseline_sse`` (R,), ``heldout_sse`` (K, R)), the resamples' run counts
-    ``weights`` (B, R), the observed closures (K,) and the resampled ones (B, K). A candidate whose
-    closure does not vary over the runs keeps its closure and widens no other's. No bound lies below
-    the candidate's worst single run (module docstring)."""
+    """The two-step studentised bounds (K,) of the module docstring, from the per-run energies
+    (``baseline_sse`` (R,), ``heldout_sse`` (K, R)), the resamples' run counts ``weights`` (B, R),
+    the observed closures (K,) and the resampled ones (B, K)."""
     runs = len(baseline_sse)
     _, (error,) = closures_and_standard_errors(np.ones((1, runs)), baseline_sse, heldout_sse)
     _, resampled_error = closures_and_standard_errors(weights, baseline_sse, heldout_sse)
     varies = np.isfinite(error) & (error > 0)
-    best = np.max(observed)
-    contenders = varies & (np.quantile(resampled, 1.0 - CONTENDER_LEVEL, axis=0) >= best)
+    contenders = varies & (np.quantile(resampled, 1.0 - CONTENDER_LEVEL, axis=0) >= observed.max())
     if not contenders.any():
         return observed.copy()
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -157,11 +172,13 @@ def rank_candidates(
     training_count: int,
     seed: int = 0,
     rule: DetectionRule | None = None,
+    studentised: bool = False,
 ) -> Ranking:
     """Rank ``evidence`` (see the module docstring); ``training_count`` = training samples.
 
     ``rule`` decides detection; without one (ranking only to choose, e.g. inside a nested
-    cross-validation) nothing is detected.
+    cross-validation) nothing is detected. ``studentised``: the two-step studentised lower bound
+    (for validation pooled over folds) instead of the percentile one.
     """
     runs = len(baseline_heldout_sse)
     generator = np.random.default_rng(seed)
@@ -179,8 +196,12 @@ def rank_candidates(
             for index in range(len(evidence))
         ]
     )
-    lower_bounds = _simultaneous_lower_bounds(
-        baseline_heldout_sse, heldout, weights, observed, resampled
+    lower_bounds = (
+        _studentised_simultaneous_lower_bounds(
+            baseline_heldout_sse, heldout, weights, observed, resampled
+        )
+        if studentised
+        else _simultaneous_lower_bounds(observed, resampled)
     )
     entries = []
     for index, item in enumerate(evidence):

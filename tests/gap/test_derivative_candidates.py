@@ -7,7 +7,14 @@ import pytest
 
 from ornitail.flight.model_file import load_model
 from ornitail.gap.flight_candidates import baseline_flight_model, flight_candidates
-from ornitail.gap.flight_diagnosis import _score_library, _Split, noise_scales, residuals_of
+from ornitail.gap.flight_diagnosis import (
+    _library_scores,
+    _rank,
+    _Split,
+    noise_scales,
+    residuals_of,
+    rule_from_energies,
+)
 from ornitail.gap.model_spec import BaselineSpec
 
 # (candidate, matrix, row, column, scale) on the simulator's states q, u, w, theta
@@ -72,7 +79,9 @@ def test_a_changed_derivative_is_named_with_its_size(
     reference = np.sqrt(np.mean(np.concatenate(residuals_of(baseline, validation)) ** 2, axis=0))
     library = flight_candidates(spec, baseline).candidates
     split = _Split(training, validation, scales, reference, seed=2)
-    ranking, _, rule = _score_library(library, baseline, baseline, split)
+    scores, _ = _library_scores(library, baseline, baseline, split)
+    rule = rule_from_energies(scores.null_start_sse, scores.null_after_sse)
+    ranking = _rank(scores, split.seed, rule)
     top = ranking.entries[0]
     assert top.name == name and ranking.detected
     assert top.heldout_closure > rule.threshold

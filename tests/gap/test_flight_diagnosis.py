@@ -12,9 +12,14 @@ from ornitail.gap.withheld_effects import WithheldCase, simulate_withheld_log, t
 from ornitail.sim.free_flight import write_flight_log_csv
 
 
-def _diagnosis(case: WithheldCase, folder, candidates: tuple[str, ...] = ()) -> FlightDiagnosis:
+def _diagnosis(
+    case: WithheldCase,
+    folder,
+    candidates: tuple[str, ...] = (),
+    validation: str = "first-fold",
+) -> FlightDiagnosis:
     log = write_flight_log_csv(simulate_withheld_log(case), folder / "flight.csv")
-    spec = dataclasses.replace(case.baseline_spec(), candidates=candidates)
+    spec = dataclasses.replace(case.baseline_spec(), candidates=candidates, validation=validation)
     spec = read_baseline_spec(write_baseline_spec(spec, folder / "model.toml"))
     return diagnose_flight(spec, [log], seed=5)
 
@@ -55,6 +60,27 @@ def test_the_gap_is_reported_on_test_manoeuvres_that_neither_fitted_nor_chose(
     )
     assert report["ranking"][0]["validation_closure"] > rule["threshold"]
     assert report["ranking"][0]["closure_interval"][0] > rule["lower_bound_threshold"]
+
+
+def test_pooled_validation_decides_on_every_folds_validation_runs_and_leaves_how_far_alone(
+    added_mass_diagnosis, tmp_path
+):
+    """``validation = "all-folds"`` (not yet the default): the ranking and the rule see the 4 x 4
+    validation runs of the four folds (the null's 24 directions fitted in each), the named effect
+    is the same, and the test runs, each scored with its own fold's choice, give the same closure
+    to the last digit: the design changes the decision only."""
+    case, first_fold = added_mass_diagnosis
+    report = _diagnosis(case, tmp_path, validation="all-folds").report
+    split = report["split"]
+    assert split["validation_design"] == "all-folds"
+    assert (report["runs"]["validation"], report["runs"]["training"]) == (16, 32)
+    assert "every fold's validation runs pooled (16" in split["method"]
+    assert report["detection_rule"]["draws"] == 24
+    assert report["verdict"] == "effect"
+    assert set(report["indistinguishable_set"]) == set(first_fold.report["indistinguishable_set"])
+    assert report["closure"]["realised_test"] == first_fold.report["closure"]["realised_test"]
+    assert split["test_choices"] == first_fold.report["split"]["test_choices"]
+    assert first_fold.report["split"]["validation_design"] == "first-fold"
 
 
 def test_added_mass_is_named_with_its_indistinguishable_inertia_twin(added_mass_report):

@@ -8,7 +8,7 @@ import pytest
 
 from ornitail.gap.flight_candidates import baseline_flight_model
 from ornitail.gap.flight_data import FlightRun
-from ornitail.gap.flight_diagnosis import null_rule
+from ornitail.gap.flight_diagnosis import null_energies, rule_from_energies
 from ornitail.gap.flight_model import LinearFlightModel, simulate_runs
 from ornitail.gap.model_spec import BaselineSpec
 
@@ -103,7 +103,9 @@ def test_the_detection_threshold_rises_when_the_baseline_leaves_a_systematic_err
     scales = np.concatenate([run.outputs for run in runs]).std(axis=0)
 
     def rule(baseline: LinearFlightModel):
-        return null_rule(baseline, runs[:6], runs[6:9], scales, seed=4, draws=8)
+        return rule_from_energies(
+            *null_energies(baseline, runs[:6], runs[6:9], scales, seed=4, draws=8)
+        )
 
     exact, missing = rule(truth), rule(wrong)
     assert exact.null_quantile < 0.05

@@ -31,6 +31,7 @@ def test_written_spec_reads_back(tmp_path):
             "derivative_refit",
         ),
         ('kind = "linear_model"\nmodel = "delfly_longitudinal"\nderivative_refit = 1', "refit"),
+        ('kind = "simulator"\ntail = "S3"\nx_h_mm = 98\nvalidation = "pooled"', "validation"),
     ],
 )
 def test_mistakes_name_the_key(tmp_path, text, where):
@@ -42,10 +43,15 @@ def test_mistakes_name_the_key(tmp_path, text, where):
 
 def test_a_model_file_baseline_needs_no_configuration_and_reads_back(tmp_path):
     spec = BaselineSpec(
-        "linear_model", model="twin_otter_short_period", segment_s=0.5, derivative_refit=True
+        "linear_model",
+        model="twin_otter_short_period",
+        segment_s=0.5,
+        derivative_refit=True,
+        validation="all-folds",
     )
     again = read_baseline_spec(write_baseline_spec(spec, tmp_path / "b.toml"))
     assert (again.tail, again.segment_s, again.derivative_refit) == ("", 0.5, True)
+    assert again.validation == "all-folds"
     assert np.isnan(again.x_h_mm)
 
 

@@ -77,51 +77,65 @@ def test_a_closure_above_the_floor_only_on_the_runs_that_chose_it_is_not_detecte
 
 
 def test_the_winners_lower_bound_carries_the_contest_it_won():
-    """K candidates that all truly close 1 - 0.9 exp(0.5^2 / 4) = 4.2 % (per-run lognormal
+    """Eight candidates that all truly close 1 - 0.9 exp(0.5^2 / 4) = 4.2 % (per-run lognormal
     scatter of sd 0.5 about a 10 % closure, drawn independently per candidate) on 16 validation
-    runs, 300 draws each. The truth is the population closure, not produced by the bound. The
-    winner's own 5 % bootstrap quantile lies below it in 0.40 of draws with 8 candidates and 0.21
-    with 15: the runs flattered the winner. The simultaneous bound (studentised max over the
-    contenders) lies below it in 0.92 and 0.94 (nominal 0.95; the binomial standard error is 0.013,
-    and the first step's 0.5 % and the bootstrap-t's small-sample error account for the rest), and
-    a lone candidate's in 0.94 where its percentile quantile gives 0.89. The test holds every rate
-    to 0.90 or more and the marginal one far below."""
+    runs, 300 draws. The winner's own 5 % bootstrap quantile lies below the truth in 0.39 of them:
+    the runs flattered it. The simultaneous bound (studentised max over the contenders) lies below
+    it in 0.61. Neither reaches the nominal 0.95, because the percentile bootstrap of a ratio of
+    sums undercovers on 16 skewed runs even for one candidate (0.88 here); the test holds the gain,
+    0.21 against a paired binomial standard error of at most 0.04, to 0.12."""
+    truth = 1 - 0.9 * np.exp(0.5**2 / 4)
+    marginal = simultaneous = 0
+    draws = 300
+    for seed in range(draws):
+        generator = np.random.default_rng(seed)
+        base = generator.gamma(4.0, 2.5, 16)
+        after = base * 0.9**2 * np.exp(0.5 * generator.standard_normal((8, 16)))
+        evidence = [_evidence(f"c{k}", after[k]) for k in range(8)]
+        ranking = rank_candidates(evidence, base, float(base.sum()), 0.0, 1000, seed=seed)
+        winner = max(ranking.entries, key=lambda entry: entry.heldout_closure)
+        marginal += winner.closure_interval[0] <= truth
+        simultaneous += winner.simultaneous_lower_bound <= truth
+    assert simultaneous / draws - marginal / draws > 0.12
+    # alone, a candidate's simultaneous bound is its own 5 % quantile
+    alone = rank_candidates([evidence[0]], base, float(base.sum()), 0.0, 1000, seed=1)
+    assert alone.entries[0].simultaneous_lower_bound == pytest.approx(
+        alone.entries[0].closure_interval[0], abs=1e-9
+    )
+
+
+def test_the_studentised_bound_covers_the_winner_near_its_nominal_rate_on_sixteen_runs():
+    """As above (K candidates truly closing 4.2 %, 16 runs, 300 draws each), the two-step
+    studentised bound, the one used with validation pooled over folds: the winner's bound lies
+    below the truth in 0.92 of draws with 8 candidates, 0.94 with 15 and 0.94 alone (nominal
+    0.95; the binomial standard error is 0.013). The test holds each to 0.90."""
     truth = 1 - 0.9 * np.exp(0.5**2 / 4)
     draws = 300
     for candidates in (1, 8, 15):
-        marginal = simultaneous = 0
+        covered = 0
         for seed in range(draws):
             generator = np.random.default_rng(seed)
             base = generator.gamma(4.0, 2.5, 16)
             after = base * 0.9**2 * np.exp(0.5 * generator.standard_normal((candidates, 16)))
             evidence = [_evidence(f"c{k}", after[k]) for k in range(candidates)]
-            ranking = rank_candidates(evidence, base, float(base.sum()), 0.0, 1000, seed=seed)
+            ranking = rank_candidates(
+                evidence, base, float(base.sum()), 0.0, 1000, seed=seed, studentised=True
+            )
             winner = max(ranking.entries, key=lambda entry: entry.heldout_closure)
-            marginal += winner.closure_interval[0] <= truth
-            simultaneous += winner.simultaneous_lower_bound <= truth
-        assert simultaneous / draws >= 0.90, candidates
-        if candidates > 1:
-            assert marginal / draws < 0.5, candidates
+            covered += winner.simultaneous_lower_bound <= truth
+        assert covered / draws >= 0.90, candidates
 
 
-def test_a_far_weaker_candidate_does_not_widen_the_winners_bound():
-    """A strong winner (closing about 55 %) beside candidates that close nothing: they are no
+def test_a_far_weaker_candidate_does_not_widen_the_winners_studentised_bound():
+    """A strong winner (closing about 55 %) beside ten candidates that close nothing: they are no
     contenders, so the winner's bound is the one it has alone."""
     generator = np.random.default_rng(4)
     base = generator.gamma(4.0, 2.5, 16)
     strong = base * 0.2 * np.exp(0.3 * generator.standard_normal(16))
     weak = [base * np.exp(0.3 * generator.standard_normal(16)) for _ in range(10)]
-    together = rank_candidates(
-        [_evidence("strong", strong)] + [_evidence(f"w{k}", w) for k, w in enumerate(weak)],
-        base,
-        float(base.sum()),
-        0.0,
-        1000,
-        seed=1,
-    )
-    alone = rank_candidates(
-        [_evidence("strong", strong)], base, float(base.sum()), 0.0, 1000, seed=1
-    )
+    evidence = [_evidence("strong", strong)] + [_evidence(f"w{k}", w) for k, w in enumerate(weak)]
+    together = rank_candidates(evidence, base, float(base.sum()), 0.0, 1000, 1, studentised=True)
+    alone = rank_candidates(evidence[:1], base, float(base.sum()), 0.0, 1000, 1, studentised=True)
     assert together.entries[0].name == "strong"
     assert together.entries[0].simultaneous_lower_bound == pytest.approx(
         alone.entries[0].simultaneous_lower_bound, abs=1e-12
@@ -129,12 +143,14 @@ def test_a_far_weaker_candidate_does_not_widen_the_winners_bound():
     assert 0.3 < alone.entries[0].simultaneous_lower_bound < alone.entries[0].heldout_closure
 
 
-def test_with_three_runs_the_bound_is_the_worst_runs_closure():
-    """Three validation runs closing 50, 40 and 30 %: a resample of one run repeated (1 in 9) has no
-    standard error, so the studentised width is infinite and the bound is the worst run's 30 %."""
+def test_with_three_runs_the_studentised_bound_is_the_worst_runs_closure():
+    """Three runs closing 50, 40 and 30 %: a resample of one run repeated (1 in 9) has no standard
+    error, so the studentised width is infinite and the bound is the worst run's 30 %."""
     base = np.array([10.0, 12.0, 9.0])
     after = base * np.array([0.5, 0.6, 0.7]) ** 2
-    ranking = rank_candidates([_evidence("a", after)], base, float(base.sum()), 0.0, 100, seed=2)
+    ranking = rank_candidates(
+        [_evidence("a", after)], base, float(base.sum()), 0.0, 100, seed=2, studentised=True
+    )
     assert ranking.entries[0].simultaneous_lower_bound == pytest.approx(0.3, abs=1e-12)
 
 
