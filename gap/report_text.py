@@ -54,7 +54,7 @@ def render_report(report: dict[str, Any]) -> str:
         f"split: {report['split']['method']}",
         f"detection rule: validation closure above {rule['threshold']:.3f}, the 95th percentile of "
         f"{rule['draws']} random one-parameter directions fitted the same way, and its lower bound "
-        "(studentised bootstrap, simultaneous over the candidates that could have won) above "
+        "(bootstrap, simultaneous over the candidates that could have won) above "
         f"{rule['lower_bound_threshold']:.3f}, the larger of their median "
         f"({rule['null_closures_median']:.3f}) and the materiality floor "
         f"{rule['materiality_floor']:.2f}",
