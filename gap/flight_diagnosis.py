@@ -311,7 +311,7 @@ def _library_scores(
 
 
 def _rank(
-    scores: FoldScores, seed: int, rule: DetectionRule | None, studentised: bool = False
+    scores: FoldScores, seed: int, rule: DetectionRule | None, bonferroni_t: bool = False
 ) -> Ranking:
     return rank_candidates(
         scores.evidence,
@@ -321,7 +321,7 @@ def _rank(
         scores.training_count,
         seed,
         rule,
-        studentised,
+        bonferroni_t,
     )
 
 
@@ -442,7 +442,7 @@ def diagnose_flight(
         step(fold, f"fold {fold} of {len(splits)}: library fitted")
     deciding = pool_folds(fold_scores) if pooled else fold_scores[0]
     rule = rule_from_energies(deciding.null_start_sse, deciding.null_after_sse)
-    ranking = _rank(deciding, seed, rule, studentised=pooled)
+    ranking = _rank(deciding, seed, rule, bonferroni_t=pooled)
     chosen_model = fold_models[0][ranking.entries[0].name]
     first_test = [runs[i] for i in splits[0].test]
     second = None

@@ -104,14 +104,15 @@ def test_the_winners_lower_bound_carries_the_contest_it_won():
     )
 
 
-def test_the_studentised_bound_covers_the_winner_near_its_nominal_rate_on_sixteen_runs():
+def test_the_bonferroni_t_bound_carries_the_contest_better_on_sixteen_runs():
     """As above (K candidates truly closing 4.2 %, 16 runs, 300 draws each), the two-step
-    studentised bound, the one used with validation pooled over folds: the winner's bound lies
-    below the truth in 0.92 of draws with 8 candidates, 0.94 with 15 and 0.94 alone (nominal
-    0.95; the binomial standard error is 0.013). The test holds each to 0.90."""
+    Bonferroni-t bound, the one used with validation pooled over folds: the winner's bound lies
+    below the truth in 0.77 of draws with 8 candidates (the percentile bound above: 0.63) and in
+    0.91 alone (nominal 0.95; the delta method treats the skewed run influences as symmetric). The
+    binomial standard error is at most 0.024; the test holds 0.70 and 0.85."""
     truth = 1 - 0.9 * np.exp(0.5**2 / 4)
     draws = 300
-    for candidates in (1, 8, 15):
+    for candidates, rate in ((1, 0.85), (8, 0.70)):
         covered = 0
         for seed in range(draws):
             generator = np.random.default_rng(seed)
@@ -119,14 +120,14 @@ def test_the_studentised_bound_covers_the_winner_near_its_nominal_rate_on_sixtee
             after = base * 0.9**2 * np.exp(0.5 * generator.standard_normal((candidates, 16)))
             evidence = [_evidence(f"c{k}", after[k]) for k in range(candidates)]
             ranking = rank_candidates(
-                evidence, base, float(base.sum()), 0.0, 1000, seed=seed, studentised=True
+                evidence, base, float(base.sum()), 0.0, 1000, seed=seed, bonferroni_t=True
             )
             winner = max(ranking.entries, key=lambda entry: entry.heldout_closure)
             covered += winner.simultaneous_lower_bound <= truth
-        assert covered / draws >= 0.90, candidates
+        assert covered / draws >= rate, candidates
 
 
-def test_a_far_weaker_candidate_does_not_widen_the_winners_studentised_bound():
+def test_a_far_weaker_candidate_does_not_widen_the_winners_bonferroni_t_bound():
     """A strong winner (closing about 55 %) beside ten candidates that close nothing: they are no
     contenders, so the winner's bound is the one it has alone."""
     generator = np.random.default_rng(4)
@@ -134,8 +135,8 @@ def test_a_far_weaker_candidate_does_not_widen_the_winners_studentised_bound():
     strong = base * 0.2 * np.exp(0.3 * generator.standard_normal(16))
     weak = [base * np.exp(0.3 * generator.standard_normal(16)) for _ in range(10)]
     evidence = [_evidence("strong", strong)] + [_evidence(f"w{k}", w) for k, w in enumerate(weak)]
-    together = rank_candidates(evidence, base, float(base.sum()), 0.0, 1000, 1, studentised=True)
-    alone = rank_candidates(evidence[:1], base, float(base.sum()), 0.0, 1000, 1, studentised=True)
+    together = rank_candidates(evidence, base, float(base.sum()), 0.0, 1000, 1, bonferroni_t=True)
+    alone = rank_candidates(evidence[:1], base, float(base.sum()), 0.0, 1000, 1, bonferroni_t=True)
     assert together.entries[0].name == "strong"
     assert together.entries[0].simultaneous_lower_bound == pytest.approx(
         alone.entries[0].simultaneous_lower_bound, abs=1e-12
@@ -143,15 +144,34 @@ def test_a_far_weaker_candidate_does_not_widen_the_winners_studentised_bound():
     assert 0.3 < alone.entries[0].simultaneous_lower_bound < alone.entries[0].heldout_closure
 
 
-def test_with_three_runs_the_studentised_bound_is_the_worst_runs_closure():
-    """Three runs closing 50, 40 and 30 %: a resample of one run repeated (1 in 9) has no standard
-    error, so the studentised width is infinite and the bound is the worst run's 30 %."""
-    base = np.array([10.0, 12.0, 9.0])
-    after = base * np.array([0.5, 0.6, 0.7]) ** 2
-    ranking = rank_candidates(
-        [_evidence("a", after)], base, float(base.sum()), 0.0, 100, seed=2, studentised=True
-    )
-    assert ranking.entries[0].simultaneous_lower_bound == pytest.approx(0.3, abs=1e-12)
+def test_one_strongly_disturbed_run_does_not_wreck_the_bonferroni_t_bound():
+    """Fifteen runs closing 40 % and one carrying twice their energy that closes 4 % (a strong
+    disturbance no effect explains), as on a simulated pitch-damping flight pooled over folds:
+    together 1 - sqrt((15 x 0.36 + 2 x 0.92) / 17) = 0.35, standard error 0.048, so the bound
+    (t on 15 degrees of freedom at 4.5 %: 1.83) is 0.26. A studentised bootstrap's quantile
+    is ruled by the resamples without that run (closing 0.40 with a standard error near 0), and
+    put that flight's bound at 0.04."""
+    base = np.ones(16)
+    base[0] = 2.0
+    after = base * 0.6**2
+    after[0] = base[0] * 0.96**2
+    (entry,) = rank_candidates(
+        [_evidence("a", after)], base, float(base.sum()), 0.0, 1000, seed=3, bonferroni_t=True
+    ).entries
+    assert entry.heldout_closure == pytest.approx(1 - np.sqrt((15 * 0.36 + 2 * 0.9216) / 17))
+    assert 0.2 < entry.simultaneous_lower_bound < entry.heldout_closure - 0.02
+
+
+def test_on_four_runs_the_bonferroni_t_bound_is_finite_and_below_the_closure():
+    """Four validation runs closing 55-65 %: the bound is the closure less Student's t on 3
+    degrees of freedom at 4.5 % (2.47 for one contender) times the closure's standard error, about
+    0.02: near 0.55, where a bootstrap of 4 runs says next to nothing."""
+    base = np.array([10.0, 12.0, 9.0, 11.0])
+    after = base * (1.0 - np.array([0.55, 0.6, 0.65, 0.58])) ** 2
+    (entry,) = rank_candidates(
+        [_evidence("a", after)], base, float(base.sum()), 0.0, 100, seed=2, bonferroni_t=True
+    ).entries
+    assert 0.5 < entry.simultaneous_lower_bound < entry.heldout_closure - 0.02
 
 
 def test_a_closure_carried_by_one_run_is_not_detected():
