@@ -47,14 +47,17 @@ def render_report(report: dict[str, Any]) -> str:
     """Readable summary: verdict, where, ranking, how far the gap shrinks, the sparse pointer."""
     runs = report["runs"]
     rule = report["detection_rule"]
+    pooled = report["split"].get("validation_design") == "all-folds"
     lines = [
         f"gap diagnosis of {report['data_kind']} data ({runs['total']} runs: "
-        f"{runs['training']} to fit and {runs['validation']} to choose in the first fold, "
+        f"{runs['training']} to fit and {runs['validation']} to choose "
+        f"{'over every fold' if pooled else 'in the first fold'}, "
         f"{runs['test']} scored as test runs; seed {report['seed']})",
         f"split: {report['split']['method']}",
         f"detection rule: validation closure above {rule['threshold']:.3f}, the 95th percentile of "
         f"{rule['draws']} random one-parameter directions fitted the same way, and its lower bound "
-        "(bootstrap, simultaneous over the candidates that could have won) above "
+        f"({'Bonferroni-t' if pooled else 'bootstrap'}, simultaneous over the candidates that "
+        "could have won) above "
         f"{rule['lower_bound_threshold']:.3f}, the larger of their median "
         f"({rule['null_closures_median']:.3f}) and the materiality floor "
         f"{rule['materiality_floor']:.2f}",

@@ -81,6 +81,9 @@ def test_pooled_validation_decides_on_every_folds_validation_runs_and_leaves_how
     assert report["closure"]["realised_test"] == first_fold.report["closure"]["realised_test"]
     assert split["test_choices"] == first_fold.report["split"]["test_choices"]
     assert first_fold.report["split"]["validation_design"] == "first-fold"
+    text = render_report(report)
+    assert "16 to choose over every fold" in text and "(Bonferroni-t, simultaneous" in text
+    assert "4 to choose in the first fold" in render_report(first_fold.report)
 
 
 def test_added_mass_is_named_with_its_indistinguishable_inertia_twin(added_mass_report):
