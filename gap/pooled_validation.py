@@ -9,7 +9,7 @@ scored each time by a model that did not see it). The null directions are fitted
 way in every fold, so that the rule compares like with like. Test runs are untouched: each is
 scored with the effect its own fold chose on its own validation runs.
 
-Not yet the default: it fits the null in every fold (about 1.5 x a diagnosis' time).
+Not yet the default: it fits the null in every fold (about 1.35 x a diagnosis' time).
 """
 
 from __future__ import annotations

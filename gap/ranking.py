@@ -55,8 +55,7 @@ from ornitail.gap.magnitude_fit import bound_side
 BOOTSTRAP_RESAMPLES = 1000
 SEPARATION_PROBABILITY = 0.95
 SIMULTANEOUS_LEVEL = 0.05  # the lower bounds fail together in 5 % of resamples
-CONTENDER_LEVEL = 0.005  # the Bonferroni-t bound's first step (who could have won) may spend this
-
+CONTENDER_LEVEL = 0.005  # of the 5 %, what the Bonferroni-t bound's first step may spend
 IDENTICAL_CLOSURE = 0.005
 
 
