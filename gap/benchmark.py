@@ -92,7 +92,7 @@ def fresh_flight_closure(case: WithheldCase, diagnosis: FlightDiagnosis, folder:
 
 
 def run_case(
-    case: WithheldCase, folder: Path, seed: int, validation: str = "first-fold"
+    case: WithheldCase, folder: Path, seed: int, validation: str = "all-folds"
 ) -> dict[str, object]:
     """Fly, write, diagnose blind, and score one case (and, when an effect is named, its closure
     on a fresh flight of the same case against the reported intervals)."""

@@ -9,9 +9,9 @@
    is calibrated on the same runs with random directions of the model (:func:`null_energies`).
 4. How far: gap before and after the chosen effect per channel on the test manoeuvres, each
    scored with the effect its own fold chose (on validation runs) and fitted (on training runs)
-   without it. Ranking, detection and verdict are the first fold's, or with
-   ``[baseline].validation = "all-folds"`` (not yet the default) every fold's validation runs
-   pooled (:mod:`ornitail.gap.pooled_validation`).
+   without it. Ranking, detection and verdict rest on every fold's validation runs pooled
+   (:mod:`ornitail.gap.pooled_validation`), or with ``[baseline].validation = "first-fold"`` on
+   the first fold's alone.
 
 Fits, ranking and the gap before and after are weighted per channel by the inverse of the noise
 level: the standard deviation of the part of the baseline's training residual that does not repeat
@@ -382,7 +382,7 @@ def _split_field(splits: Sequence[RunSplit], count: int, pooled: bool) -> dict[s
         field["method"] = field["method"].replace(
             "ranking, detection rule and verdict from fold 1",
             f"ranking, detection rule and verdict from every fold's validation runs pooled "
-            f"({field['validation']}; not yet the default), magnitudes from fold 1",
+            f"({field['validation']}), magnitudes from fold 1",
         )
     return field
 

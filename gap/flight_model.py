@@ -166,25 +166,27 @@ def _hold(
 
 
 def simulate_runs(model: LinearFlightModel, runs: Sequence[FlightRun]) -> list[np.ndarray]:
-    """Predicted measured outputs (N, outputs) of ``model`` on each run (module docstring)."""
+    """Predicted measured outputs (N, outputs) of ``model`` on each run (module docstring).
+
+    The runs of one sample time are propagated together, as the columns of one state recursion
+    (shorter runs padded at their end; a padded sample never reaches an earlier one), so the
+    recursion's Python steps are paid once per sample time, not once per run.
+    """
     a_matrix = np.ascontiguousarray(model.a_matrix, dtype=float)
     driving = np.ascontiguousarray(
         model.b_matrix + model.a_matrix @ _filter_matrix(model), dtype=float
     )
-    return [
-        _simulate(
-            model,
-            run,
-            *_hold(
-                a_matrix.tobytes(),
-                driving.tobytes(),
-                driving.shape,
-                round(run.time_step_s, 12),
-                model.input_hold,
-            ),
-        )
-        for run in runs
-    ]
+    by_step: dict[float, list[int]] = {}
+    for index, run in enumerate(runs):
+        by_step.setdefault(round(run.time_step_s, 12), []).append(index)
+    predicted: list[np.ndarray] = [np.empty(0)] * len(runs)
+    for step_s, indices in by_step.items():
+        hold = _hold(a_matrix.tobytes(), driving.tobytes(), driving.shape, step_s, model.input_hold)
+        for index, outputs in zip(
+            indices, _simulate_together(model, [runs[i] for i in indices], *hold), strict=True
+        ):
+            predicted[index] = outputs
+    return predicted
 
 
 def delayed_inputs(model: LinearFlightModel, run: FlightRun) -> np.ndarray:
@@ -203,27 +205,65 @@ def delayed_inputs(model: LinearFlightModel, run: FlightRun) -> np.ndarray:
     return inputs
 
 
-def _simulate(
-    model: LinearFlightModel, run: FlightRun, ad: np.ndarray, bd: np.ndarray, bd_next: np.ndarray
-) -> np.ndarray:
-    inputs = delayed_inputs(model, run)
+def _padded(arrays: Sequence[np.ndarray], longest: int) -> np.ndarray:
+    """(longest, runs, ...) of per-run (N, ...) arrays, zero past each run's end."""
+    stacked = np.zeros((longest, len(arrays), *arrays[0].shape[1:]))
+    for column, array in enumerate(arrays):
+        stacked[: len(array), column] = array
+    return stacked
+
+
+def _times(matrix: np.ndarray, stacked: np.ndarray) -> np.ndarray:
+    """``matrix`` applied to the last axis of ``stacked`` (N, runs, k): one 2-D product."""
+    flat = stacked.reshape(-1, stacked.shape[-1]) @ matrix.T
+    return flat.reshape(*stacked.shape[:-1], len(matrix))
+
+
+def _simulate_together(
+    model: LinearFlightModel,
+    runs: Sequence[FlightRun],
+    ad: np.ndarray,
+    bd: np.ndarray,
+    bd_next: np.ndarray,
+) -> list[np.ndarray]:
+    """Predicted outputs of ``model`` on ``runs`` of one sample time, discretised as ``ad``,
+    ``bd``, ``bd_next``: one recursion over the runs as columns (padded arrays: sample, run, ...).
+    """
     filtered = _filter_matrix(model)
-    outputs = len(model.output_names)
-    biases = np.asarray(model.output_biases or _zeros(outputs))
-    drifts = np.asarray(model.output_drifts or _zeros(outputs))
-    offsets = biases[None, :] + drifts[None, :] * (run.time_s - 0.5 * run.input_start_s)[:, None]
-    start = run.initial_state.copy()
+    lengths = [len(run.time_s) for run in runs]
+    longest = max(lengths)
+    logged = _padded([delayed_inputs(model, run) for run in runs], longest)
+    following = next_inputs(logged)
+    for column, length in enumerate(lengths):  # u[k+1] of a run's last sample is its own
+        following[length - 1, column] = logged[length - 1, column]
+    time_s = _padded([run.time_s for run in runs], longest)
+    input_start_s = np.array([run.input_start_s for run in runs])
+    output_count = len(model.output_names)
+    biases = np.asarray(model.output_biases or _zeros(output_count))
+    drifts = np.asarray(model.output_drifts or _zeros(output_count))
+    offsets = biases + drifts * (time_s - 0.5 * input_start_s)[..., None]  # (N, runs, outputs)
+    starts = np.array([run.initial_state for run in runs], dtype=float)  # (runs, states)
     for index, name in enumerate(model.output_names):
         if name in model.state_names:  # the measured start holds the sensor's offset
-            start[model.state_names.index(name)] -= offsets[0, index]
-    start -= filtered @ inputs[0]
-    states = propagate(ad, inputs @ bd.T + next_inputs(inputs) @ bd_next.T, start)
-    states += inputs @ filtered.T
-    acting = inputs
+            starts[:, model.state_names.index(name)] -= offsets[0, :, index]
+    starts -= logged[0] @ filtered.T
+    forcing = _times(bd, logged) + _times(bd_next, following)  # (N, runs, states)
+    states = propagate(ad, forcing.transpose(0, 2, 1), starts.T).transpose(0, 2, 1)
+    states += _times(filtered, logged)
+    acting = logged
     if any(model.filters_s):
-        rates = np.gradient(inputs, run.time_step_s, axis=0)
-        acting = inputs + rates * np.asarray(model.filters_s)
-    predicted = states @ model.c.T + acting @ model.d.T + offsets
-    if not np.all(np.isfinite(predicted)):
-        return np.full_like(predicted, 1e6)
+        rates = _padded(
+            [
+                np.gradient(logged[:length, column], run.time_step_s, axis=0)
+                for column, (run, length) in enumerate(zip(runs, lengths, strict=True))
+            ],
+            longest,
+        )
+        acting = logged + rates * np.asarray(model.filters_s)
+    outputs = _times(model.c, states) + _times(model.d, acting) + offsets
+    predicted = []
+    for column, length in enumerate(lengths):
+        run_outputs = outputs[:length, column]
+        finite = np.all(np.isfinite(run_outputs))
+        predicted.append(run_outputs if finite else np.full_like(run_outputs, 1e6))
     return predicted

@@ -10,7 +10,7 @@ effects_off = ["added_mass"]    # simulator effects the baseline leaves out
 # candidates = ["added_mass", "input_delay"]   # optional: restrict the library
 # segment_s = 1.0               # linear_model: cut logs into segments of this many seconds
 # derivative_refit = true       # linear_model: also re-fit the model's own derivatives
-# validation = "all-folds"      # not yet the default: the rule on every fold's validation runs
+# validation = "first-fold"     # rank and detect on the first fold's validation runs only (default: all-folds)
 ```
 
 ``tail`` and ``x_h_mm`` are required for the simulator and optional for a model file (they then
@@ -32,8 +32,8 @@ from ornitail.vehicle.geometry import require_tail_position_mm, study_tail_geome
 
 BASELINE_KINDS = ("simulator", "linear_model")
 VALIDATION_DESIGNS = ("first-fold", "all-folds")
-"""Which validation runs rank the candidates and calibrate the detection rule: the first fold's
-(the default), or every fold's pooled ("all-folds", not yet the default: docs/gap-diagnosis.md)."""
+"""Which validation runs rank the candidates and calibrate the detection rule: every fold's pooled
+("all-folds", the default), or the first fold's alone ("first-fold", the design before: docs/gap-diagnosis.md)."""
 
 
 @dataclass(frozen=True)
@@ -49,7 +49,7 @@ class BaselineSpec:
     source: str = "baseline"
     segment_s: float | None = None  # linear_model: logs cut into segments of this length (s)
     derivative_refit: bool = False  # linear_model: re-fit the model's derivatives too
-    validation: str = "first-fold"  # one of VALIDATION_DESIGNS
+    validation: str = "all-folds"  # one of VALIDATION_DESIGNS
 
 
 def _names(table: TomlTable, key: str, known: tuple[str, ...] | None) -> tuple[str, ...]:
@@ -100,7 +100,7 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
         study_tail_geometry(tail, where=table.where("tail"))
     segment_s = table.number("segment_s", None, positive=True)
     refit = table.boolean("derivative_refit", False)
-    validation = table.text("validation", "first-fold", choices=VALIDATION_DESIGNS)
+    validation = table.text("validation", "all-folds", choices=VALIDATION_DESIGNS)
     for key, given in (("segment_s", segment_s is not None), ("derivative_refit", refit)):
         if given and kind != "linear_model":
             raise UserInputError(table.where(key), "only for kind = linear_model (a model file)")
@@ -137,7 +137,7 @@ def write_baseline_spec(spec: BaselineSpec, path: str | Path) -> Path:
         lines.append(f"segment_s = {spec.segment_s:g}")
     if spec.derivative_refit:
         lines.append("derivative_refit = true")
-    if spec.validation != "first-fold":
+    if spec.validation != "all-folds":
         lines.append(f'validation = "{spec.validation}"')
     if spec.model:
         lines.append(f'model = "{spec.model}"')

@@ -27,7 +27,7 @@ not have won follows Hansen's test for superior predictive ability, which drops 
 below the best so that they do not widen the bound). With one contender it is that candidate's 5 %
 quantile of the percentile bootstrap, the bound used before.
 
-With validation pooled over the folds (``[baseline].validation = "all-folds"``, not yet the default)
+With validation pooled over the folds (``[baseline].validation = "all-folds"``, the default)
 the rule has 12-20 runs and the bound is a two-step Bonferroni-t (after Romano, Shaikh and Wolf's
 two-step method for moment inequalities): the contenders are those whose 99.5 % resample quantile
 (:data:`CONTENDER_LEVEL`) reaches the best closure; each of the m contenders' bounds is c_j - t s_j,

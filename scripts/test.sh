@@ -11,6 +11,10 @@
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
 export QT_QPA_PLATFORM=offscreen
+# One BLAS thread per process: the suite already runs two processes on two cores, and OpenBLAS's extra threads
+# only contended with them (tests/gap on two workers: 165 s with them, 86 s without; one flight diagnosis alone is
+# no faster with two threads).
+export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
 export PYQTGRAPH_QT_LIB=PySide6
 if [ $# -gt 0 ]; then
   exec .venv/bin/python -m pytest "$@"
