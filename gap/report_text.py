@@ -48,10 +48,14 @@ def render_report(report: dict[str, Any]) -> str:
     runs = report["runs"]
     rule = report["detection_rule"]
     pooled = report["split"].get("validation_design") == "all-folds"
+    roles = (
+        f"{report['split']['folds']} folds: {runs['training']} training and {runs['validation']} "
+        "validation places over them, every fold's validation scores pooled to choose"
+        if pooled
+        else f"{runs['training']} to fit and {runs['validation']} to choose in the first fold"
+    )
     lines = [
-        f"gap diagnosis of {report['data_kind']} data ({runs['total']} runs: "
-        f"{runs['training']} to fit and {runs['validation']} to choose "
-        f"{'over every fold' if pooled else 'in the first fold'}, "
+        f"gap diagnosis of {report['data_kind']} data ({runs['total']} runs, {roles}; "
         f"{runs['test']} scored as test runs; seed {report['seed']})",
         f"split: {report['split']['method']}",
         f"detection rule: validation closure above {rule['threshold']:.3f}, the 95th percentile of "

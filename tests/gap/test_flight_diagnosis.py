@@ -90,7 +90,8 @@ def test_pooled_validation_decides_on_every_folds_validation_runs_and_leaves_how
     assert split["test_choices"] == first_fold.report["split"]["test_choices"]
     assert first_fold.report["split"]["validation_design"] == "first-fold"
     text = render_report(report)
-    assert "16 to choose over every fold" in text and "(Bonferroni-t, simultaneous" in text
+    assert "16 runs, 4 folds: 32 training and 16 validation places" in text
+    assert "(Bonferroni-t, simultaneous" in text
     assert "4 to choose in the first fold" in render_report(first_fold.report)
 
 
