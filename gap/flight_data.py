@@ -46,8 +46,6 @@ SIMULATOR_UNITS = ("rad/s", "m/s", "m/s", "rad")
 HISTORY_S = 0.5  # a segment carries this much of the inputs logged before it (s)
 MODEL_UNIT = "model unit"  # a model file's signals are in whatever its [columns] scale them to
 TARGET_RATE_HZ = 64.0
-VALIDATION_FRACTION = 0.25
-TEST_FRACTION = 0.25
 MINIMUM_PER_PART = 2
 MINIMUM_RUNS = 3 * MINIMUM_PER_PART
 MINIMUM_MANOEUVRES = MINIMUM_RUNS
@@ -282,11 +280,12 @@ class RunSplit:
 
 
 def nested_splits(count: int, seed: int, where: str = "data") -> list[RunSplit]:
-    """Seeded nested splits of ``count`` runs: the runs are cut into ``min(``:data:`OUTER_FOLDS`
-    ``, count // ``:data:`MINIMUM_PER_PART```)`` test folds; for each, the other runs are split
-    into training (2/3) and validation (1/3), each at least :data:`MINIMUM_PER_PART` runs. With 20
-    runs every fold is 10/5/5 (training/validation/test), the 50/25/25 split. Every run is a test
-    run exactly once, and never a training or validation run of its own fold. Fewer than
+    """Seeded nested splits of ``count`` runs: the runs are cut at random into ``min(``
+    :data:`OUTER_FOLDS` ``, count // ``:data:`MINIMUM_PER_PART```)`` groups; fold k tests group k,
+    validates on group k + 1 (cyclically) and trains on the others, so every run is a test run
+    exactly once and a validation run exactly once, never both in one fold (with 4 groups the
+    50/25/25 split: 10/5/5 training/validation/test with 20 runs). The validation runs pooled over
+    the folds are then every run once, not a few runs counted several times. Fewer than
     :data:`MINIMUM_RUNS` runs stop with a one-line error naming ``where``."""
     if count < MINIMUM_RUNS:
         raise UserInputError(
@@ -296,19 +295,23 @@ def nested_splits(count: int, seed: int, where: str = "data") -> list[RunSplit]:
         )
     order = np.random.default_rng(seed).permutation(count)
     folds = min(OUTER_FOLDS, count // MINIMUM_PER_PART)
+    groups = np.array_split(order, folds)
     splits = []
-    for index, test in enumerate(np.array_split(order, folds)):
-        rest = order[~np.isin(order, test)]
-        validation = max(
-            MINIMUM_PER_PART, int(round(len(rest) * VALIDATION_FRACTION / (1.0 - TEST_FRACTION)))
+    for index, test in enumerate(groups):
+        validation = groups[(index + 1) % folds]
+        training = np.concatenate(
+            [
+                group
+                for other, group in enumerate(groups)
+                if other not in (index, (index + 1) % folds)
+            ]
         )
-        training = len(rest) - validation
         splits.append(
             RunSplit(
-                training=np.sort(rest[:training]),
-                validation=np.sort(rest[training:]),
+                training=np.sort(training),
+                validation=np.sort(validation),
                 test=np.sort(test),
-                method=f"fold {index + 1} of {folds}: {training}/{validation}/{len(test)} "
+                method=f"fold {index + 1} of {folds}: {len(training)}/{len(validation)}/{len(test)} "
                 f"(training/validation/test, seed {seed})",
             )
         )

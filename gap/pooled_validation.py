@@ -4,9 +4,9 @@ The first fold's validation runs alone are few (4 of a 16-manoeuvre flight), too
 lower bound (docs/gap-diagnosis.md, *Simultaneous lower bound*). Every fold already fits each
 candidate on its own training runs and scores it on its own validation runs (to choose the effect
 its test runs are scored with); pooled, those scores give the ranking and the detection rule every
-fold's validation runs: 16 of 16 manoeuvres (a run may be a validation run of more than one fold,
-scored each time by a model that did not see it). The null directions are fitted and scored the same
-way in every fold, so that the rule compares like with like. Test runs are untouched: each is
+fold's validation runs: 16 of 16 manoeuvres, each run once (:func:`ornitail.gap.flight_data.nested_splits`
+validates fold k on group k + 1), scored by a model that did not see it. The null directions are fitted
+and scored the same way in every fold, so that the rule compares like with like. Test runs are untouched: each is
 scored with the effect its own fold chose on its own validation runs.
 
 It fits the null in every fold: about 1.15 x a diagnosis' time with the first fold's validation runs alone

@@ -199,6 +199,10 @@ def test_test_runs_are_disjoint_from_training_and_validation_in_every_fold():
             assert min(len(runs) for runs in sets) >= 2
         tested = np.concatenate([part.test for part in folds])
         assert sorted(tested) == list(range(count))  # every run a test run exactly once
+        validated = np.concatenate([part.validation for part in folds])
+        # and a validation run exactly once: pooled over the folds, the validation runs are every
+        # run once (before, three folds of four validated on the same runs)
+        assert sorted(validated) == list(range(count))
     folds = nested_splits(20, seed=3)
     assert [(len(p.training), len(p.validation), len(p.test)) for p in folds] == [(10, 5, 5)] * 4
     counts = nested_split_counts(folds, 20)
