@@ -23,7 +23,7 @@ from __future__ import annotations
 import dataclasses
 import sys
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -33,15 +33,16 @@ from benchmark_timing import alternating_medians_s, repeats_and_json_options
 from ornitail.app.cli_output import emit
 from ornitail.gap import flight_diagnosis
 from ornitail.gap.example_data import write_example
-from ornitail.gap.flight_model import simulate_runs
+from ornitail.gap.flight_data import FlightRun
+from ornitail.gap.flight_model import LinearFlightModel, simulate_runs
 from ornitail.gap.model_spec import read_baseline_spec
 
 MANOEUVRES = 16
 DESIGNS = ("first-fold", "all-folds")
 
 
-def one_run_at_a_time(model, runs):  # noqa: ANN001, ANN201 - same signature as simulate_runs
-    """The baseline: each run propagated by a recursion of its own."""
+def one_run_at_a_time(model: LinearFlightModel, runs: Sequence[FlightRun]) -> list[np.ndarray]:
+    """The baseline: each run propagated by a recursion of its own (``simulate_runs``'s signature)."""
     return [simulate_runs(model, [run])[0] for run in runs]
 
 
@@ -70,11 +71,9 @@ def largest_relative_difference(first: dict, second: dict) -> float:
     """Largest |a - b| / max(|a|, |b|, 1e-6) over the reports' numbers (inf when they differ in shape): a number
     at the rounding floor, such as a closure of 1e-16 against 0, counts absolutely."""
     a, b = np.array(numbers_of(first)), np.array(numbers_of(second))
-    if a.shape != b.shape:
+    if a.shape != b.shape or not np.array_equal(np.isfinite(a), np.isfinite(b)):
         return float("inf")
-    finite = np.isfinite(a) & np.isfinite(b)
-    if not np.array_equal(np.isfinite(a), np.isfinite(b)):
-        return float("inf")
+    finite = np.isfinite(a)
     scale = np.maximum(np.maximum(np.abs(a[finite]), np.abs(b[finite])), 1e-6)
     return float(np.max(np.abs(a[finite] - b[finite]) / scale, initial=0.0))
 
