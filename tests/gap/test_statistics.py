@@ -144,6 +144,33 @@ def test_a_far_weaker_candidate_does_not_widen_the_winners_bonferroni_t_bound():
     assert 0.3 < alone.entries[0].simultaneous_lower_bound < alone.entries[0].heldout_closure
 
 
+def test_one_model_under_two_names_is_counted_once_by_the_bonferroni_t_bound():
+    """Added mass and I_yy are one model family: their validation energies agree run by run. Two such
+    candidates have the bound of one alone (t at 4.5 %); two different models closing as much on other
+    runs widen it (t at 2.25 %: 2.19 against 1.81 on 15 degrees of freedom, x the standard error)."""
+    generator = np.random.default_rng(6)
+    base = generator.gamma(4.0, 2.5, 16)
+    effect = base * 0.64 * np.exp(0.3 * generator.standard_normal(16))
+    same = effect * (1.0 + 1e-5 * generator.standard_normal(16))  # a fit's tolerance apart
+    other = base * 0.64 * np.exp(0.3 * generator.standard_normal(16))
+    other *= effect.sum() / other.sum()  # closes exactly as much
+    bounds = {}
+    for label, pair in (
+        ("alone", [effect]),
+        ("one model", [effect, same]),
+        ("two", [effect, other]),
+    ):
+        evidence = [_evidence(f"c{k}", sse) for k, sse in enumerate(pair)]
+        ranking = rank_candidates(
+            evidence, base, float(base.sum()), 0.0, 1000, 2, bonferroni_t=True
+        )
+        bounds[label] = next(e for e in ranking.entries if e.name == "c0").simultaneous_lower_bound
+    closure = 1 - np.sqrt(effect.sum() / base.sum())
+    assert bounds["one model"] == pytest.approx(bounds["alone"], abs=1e-12)
+    width_ratio = (closure - bounds["two"]) / (closure - bounds["alone"])
+    assert width_ratio == pytest.approx(2.1870 / 1.8123, rel=1e-3)
+
+
 def test_one_strongly_disturbed_run_does_not_wreck_the_bonferroni_t_bound():
     """Fifteen runs closing 40 % and one carrying twice their energy that closes 4 % (a strong
     disturbance no effect explains), as on a simulated pitch-damping flight pooled over folds:
