@@ -15,6 +15,11 @@ closures differ by less than :data:`IDENTICAL_CLOSURE` (the same model family, e
 I_yy). An effect is *detected* when the calibrated rule (:mod:`ornitail.gap.detection`) accepts the
 best validation closure and its *simultaneous lower bound*.
 
+One model under several names (every validation run's energy the same within
+:data:`SAME_MODEL_ENERGY`: added mass and I_yy in the simulator) is one hypothesis: its members share
+their probability of being best (the share of resamples in which that model closes most; which of its
+names wins a resample is rounding) and list each other in ``same_model_as``.
+
 Simultaneous lower bound: the best of several candidates on the same validation runs is the one those
 runs flattered most (the winner's curse), so its own 5 % bootstrap quantile is too high a bound. Each
 candidate's bound is instead its closure minus t times its bootstrap standard deviation, with t the
@@ -98,6 +103,7 @@ class RankedEffect:
     simultaneous_lower_bound: float
     training_closure: float
     probability_best: float
+    same_model_as: tuple[str, ...]
     input_correlation_drop: float
     aic: float
     in_top_set: bool
@@ -144,23 +150,25 @@ def _bonferroni_t_lower_bounds(
     contenders = varies & (np.quantile(resampled, 1.0 - CONTENDER_LEVEL, axis=0) >= observed.max())
     if runs < 2 or not contenders.any():
         return observed.copy()
-    distinct = _distinct_models(heldout_sse[contenders], baseline_sse)
+    distinct = len(set(model_groups(heldout_sse[contenders], baseline_sse)))
     width = stats.t.isf((SIMULTANEOUS_LEVEL - CONTENDER_LEVEL) / distinct, runs - 1)
     return np.where(varies, observed - width * error, observed)
 
 
-def _distinct_models(heldout_sse: np.ndarray, baseline_sse: np.ndarray) -> int:
-    """How many different models the rows of ``heldout_sse`` (K, R) are: rows whose every run's
-    energy agrees within :data:`SAME_MODEL_ENERGY` of the baseline's (``baseline_sse`` (R,)) are
-    one model (their bounds fail together, so Bonferroni counts them once)."""
-    representatives: list[np.ndarray] = []
-    for row in heldout_sse:
-        if not any(
-            np.max(np.abs(row - kept) / baseline_sse) < SAME_MODEL_ENERGY
-            for kept in representatives
-        ):
-            representatives.append(row)
-    return len(representatives)
+def model_groups(heldout_sse: np.ndarray, baseline_sse: np.ndarray) -> list[int]:
+    """A label per row of ``heldout_sse`` (K, R), equal for rows that are one model: every run's
+    energy agrees within :data:`SAME_MODEL_ENERGY` of the baseline's (``baseline_sse`` (R,)) with
+    the row the label names (their bounds fail together, so Bonferroni counts them once)."""
+    labels: list[int] = []
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for index, row in enumerate(heldout_sse):
+            same = (
+                label
+                for label in dict.fromkeys(labels)
+                if np.max(np.abs(row - heldout_sse[label]) / baseline_sse) < SAME_MODEL_ENERGY
+            )
+            labels.append(next(same, index))
+    return labels
 
 
 def _order_key(entry: RankedEffect) -> tuple[int, float, float]:
@@ -194,6 +202,8 @@ def rank_candidates(
     resampled = _closures(weights @ baseline_heldout_sse, weights @ heldout.T)  # (B, K)
     best = int(np.argmax(observed))
     winners = np.argmax(resampled, axis=1)
+    groups = np.array(model_groups(heldout, baseline_heldout_sse))
+    winning_models = groups[winners]
     tied = np.array(
         [
             index == best
@@ -222,7 +232,12 @@ def rank_candidates(
                 closure_interval=(float(low), float(high)),
                 simultaneous_lower_bound=float(lower_bounds[index]),
                 training_closure=float(training_closure),
-                probability_best=float(np.mean(winners == index)),
+                probability_best=float(np.mean(winning_models == groups[index])),
+                same_model_as=tuple(
+                    other.name
+                    for other, group in zip(evidence, groups, strict=True)
+                    if group == groups[index] and other is not item
+                ),
                 input_correlation_drop=baseline_input_correlation - item.input_correlation,
                 aic=float(aic),
                 in_top_set=bool(tied[index]),

@@ -107,6 +107,7 @@ def assemble_report(
                 "simultaneous_lower_bound": entry.simultaneous_lower_bound,
                 "training_closure": entry.training_closure,
                 "probability_best": entry.probability_best,
+                "same_model_as": list(entry.same_model_as),
                 "input_correlation_drop": entry.input_correlation_drop,
                 "aic": entry.aic,
                 "in_top_set": entry.in_top_set,

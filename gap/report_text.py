@@ -101,6 +101,11 @@ def render_report(report: dict[str, Any]) -> str:
             f"training {entry['training_closure']:+.3f}  k = "
             f"{magnitude_text({'value': entry['magnitude'], 'unit': entry['unit'], 'at_bound': entry['at_bound']})}"
             f"  P(best) {entry['probability_best']:.2f}"
+            + (
+                f" (one model with {', '.join(entry['same_model_as'])})"
+                if entry["in_top_set"] and entry["same_model_as"]
+                else ""
+            )
         )
     for name, reason in (report.get("candidates_skipped") or {}).items():
         lines.append(f"  skipped {name}: {reason}")

@@ -24,13 +24,21 @@ NULL = DetectionRule("test", np.linspace(0.0, 0.125, 25))
 
 
 def test_identical_families_form_one_set_and_a_clear_winner_stands_alone():
+    """Two names of one model (energies a fit's tolerance apart) form one set, share the probability
+    of being best (1: every resample's winner is one of them, which one is rounding) and name each
+    other; a candidate closing far less stands alone."""
     generator = np.random.default_rng(1)
     base = generator.uniform(9.0, 11.0, 12)
     effect = base * 0.25  # closes 1 - sqrt(0.25) = 50 %
     other = base * 0.81  # closes 10 %
-    evidence = [_evidence("a", effect), _evidence("b", effect.copy()), _evidence("c", other)]
+    same = effect * (1.0 + 1e-5 * generator.standard_normal(12))
+    evidence = [_evidence("a", effect), _evidence("b", same), _evidence("c", other)]
     ranking = rank_candidates(evidence, base, float(base.sum()), 0.0, 1000, seed=0, rule=NULL)
     assert set(ranking.top_set) == {"a", "b"}
+    by_name = {entry.name: entry for entry in ranking.entries}
+    assert by_name["a"].probability_best == by_name["b"].probability_best == 1.0
+    assert by_name["a"].same_model_as == ("b",) and by_name["b"].same_model_as == ("a",)
+    assert by_name["c"].same_model_as == () and by_name["c"].probability_best == 0.0
     assert ranking.detected
     assert ranking.entries[0].heldout_closure == pytest.approx(0.5, abs=1e-12)
     assert ranking.entries[-1].name == "c" and not ranking.entries[-1].in_top_set
