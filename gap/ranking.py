@@ -64,10 +64,11 @@ SIMULTANEOUS_LEVEL = 0.05  # the lower bounds fail together in 5 % of resamples
 CONTENDER_LEVEL = 0.005  # of the 5 %, what the Bonferroni-t bound's first step may spend
 IDENTICAL_CLOSURE = 0.005
 SAME_MODEL_ENERGY = 5e-4
-"""Two candidates are one model for the Bonferroni count when every validation run's energy agrees within this
-fraction of the baseline's: added mass and I_yy, one model family, agree within 7e-5 (their fits' tolerance) on
-every simulated flight of the four benchmark seeds; the closest different models among contenders (a delay and
-a first-order filter) differed by 2.8e-3 at least (docs/gap-diagnosis.md)."""
+"""Two candidates are one model (counted once by the Bonferroni-t bound, sharing their probability of being best) when
+every validation run's energy agrees within this fraction of the baseline's: added mass and I_yy, one model family,
+agree within 7e-5 (their fits' tolerance) on every simulated flight of the four benchmark seeds; the closest
+different models among contenders (a delay and a first-order filter) differed by 2.8e-3 at least
+(docs/gap-diagnosis.md)."""
 
 
 @dataclass(frozen=True)
@@ -150,12 +151,12 @@ def _bonferroni_t_lower_bounds(
     contenders = varies & (np.quantile(resampled, 1.0 - CONTENDER_LEVEL, axis=0) >= observed.max())
     if runs < 2 or not contenders.any():
         return observed.copy()
-    distinct = len(set(model_groups(heldout_sse[contenders], baseline_sse)))
+    distinct = len(set(_model_groups(heldout_sse[contenders], baseline_sse)))
     width = stats.t.isf((SIMULTANEOUS_LEVEL - CONTENDER_LEVEL) / distinct, runs - 1)
     return np.where(varies, observed - width * error, observed)
 
 
-def model_groups(heldout_sse: np.ndarray, baseline_sse: np.ndarray) -> list[int]:
+def _model_groups(heldout_sse: np.ndarray, baseline_sse: np.ndarray) -> list[int]:
     """A label per row of ``heldout_sse`` (K, R), equal for rows that are one model: every run's
     energy agrees within :data:`SAME_MODEL_ENERGY` of the baseline's (``baseline_sse`` (R,)) with
     the row the label names (their bounds fail together, so Bonferroni counts them once)."""
@@ -202,7 +203,7 @@ def rank_candidates(
     resampled = _closures(weights @ baseline_heldout_sse, weights @ heldout.T)  # (B, K)
     best = int(np.argmax(observed))
     winners = np.argmax(resampled, axis=1)
-    groups = np.array(model_groups(heldout, baseline_heldout_sse))
+    groups = np.array(_model_groups(heldout, baseline_heldout_sse))
     winning_models = groups[winners]
     tied = np.array(
         [
