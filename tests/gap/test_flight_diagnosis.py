@@ -103,6 +103,13 @@ def test_added_mass_is_named_with_its_indistinguishable_inertia_twin(added_mass_
     # 11 training manoeuvres at the default noise: the benchmark's median magnitude error is
     # ~5 %; 25 % leaves room for a single draw's scatter while a wrong family would miss by far more
     assert entry["magnitude"] == pytest.approx(true_magnitudes(case)["added_mass"], rel=0.25)
+    # one model under two names: they name each other and share the probability of being best (every
+    # resample's winner is one of them), so the text does not split it between them
+    twin = next(e for e in report["ranking"] if e["name"] == "iyy_shift")
+    assert entry["same_model_as"] == ["iyy_shift"] and twin["same_model_as"] == ["added_mass"]
+    assert entry["probability_best"] == twin["probability_best"] == report["confidence"]
+    text = render_report(report)
+    assert f"P(best) {entry['probability_best']:.2f} (one model with iyy_shift)" in text
 
 
 def test_the_gap_shrinks_on_withheld_manoeuvres_and_training_predicts_it(added_mass_report):
