@@ -3,7 +3,8 @@
 Inputs are per-run normalised squared residuals (run = a withheld manoeuvre or tunnel point).
 Closure = 1 - gap_after / gap_before, gap = sqrt(sum of normalised squared residuals / count).
 Order: held-out closure first; candidates the withheld data cannot separate from the best form
-the top *set* and are ordered among themselves by the drop of the residual-input correlation,
+the top *set* and are ordered among themselves by their probability of being best (the share of
+resamples in which their model closes most), then by the drop of the residual-input correlation,
 then by AIC on the training data (which assumes white residuals, so it only breaks ties).
 
 The held-out runs here are the *validation* runs: they choose, and the gap's shrinking is reported
@@ -172,11 +173,12 @@ def _model_groups(heldout_sse: np.ndarray, baseline_sse: np.ndarray) -> list[int
     return labels
 
 
-def _order_key(entry: RankedEffect) -> tuple[int, float, float]:
-    """Top set by input-correlation drop (to 1e-3), then AIC; the rest by held-out closure."""
+def _order_key(entry: RankedEffect) -> tuple[int, float, float, float]:
+    """Top set by probability of being best, then input-correlation drop (to 1e-3), then AIC; the
+    rest by held-out closure."""
     if entry.in_top_set:
-        return (0, -round(entry.input_correlation_drop, 3), entry.aic)
-    return (1, -entry.heldout_closure, 0.0)
+        return (0, -entry.probability_best, -round(entry.input_correlation_drop, 3), entry.aic)
+    return (1, -entry.heldout_closure, 0.0, 0.0)
 
 
 def rank_candidates(
