@@ -22,7 +22,7 @@ def magnitude_text(magnitude: dict[str, Any]) -> str:
     return f"{prefix}{magnitude['value']:.4g} {magnitude['unit']}{edge}"
 
 
-def _refit_lines(refit: dict[str, Any] | None) -> list[str]:
+def derivative_refit_lines(refit: dict[str, Any] | None) -> list[str]:
     """The derivative re-fit (docs/gap-diagnosis.md, Method step 7) as text; none when not asked."""
     if not refit:
         return []
@@ -33,6 +33,11 @@ def _refit_lines(refit: dict[str, Any] | None) -> list[str]:
         f"derivative re-fit ({refit['method']}, {refit['training_runs']} training runs; the most a "
         f"linear re-fit closes on test runs: {refit['closure_test']:.3f} [{low:.3f}, {high:.3f}]):"
     ]
+    if not refit["supported_by_test_runs"]:
+        lines.append(
+            "  not supported by the test runs: the re-fit predicts them no better than the baseline, so the moves "
+            "(*) fit the training runs only and do not say where the model is wrong"
+        )
     for name, item in refit["derivatives"].items():
         low, high = item["change_interval"]
         mark = "*" if item["moved"] else " "
@@ -128,7 +133,7 @@ def render_report(report: dict[str, Any]) -> str:
             f"  on new data of as many runs (a fresh flight): closure {fresh_low:.3f} to "
             f"{fresh_high:.3f} (90 % prediction interval: these runs' scatter and the new data's own)"
         )
-    lines += _refit_lines(report.get("derivative_refit"))
+    lines += derivative_refit_lines(report.get("derivative_refit"))
     pointer = report["sparse_regression"]
     lines.append("sparse regression of the residual (pointer):")
     for target, fit in pointer.items():
