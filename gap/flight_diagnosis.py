@@ -500,7 +500,7 @@ def diagnose_flight(
             baseline,
             split.training,
             first_test,
-            lambda model, runs: _channel_sse(residuals_of(model, runs), scales).sum(axis=1),
+            lambda model, runs: [residual / scales for residual in residuals_of(model, runs)],
             seed,
         )
         if spec.derivative_refit

@@ -31,7 +31,10 @@ def derivative_refit_lines(refit: dict[str, Any] | None) -> list[str]:
     low, high = refit["closure_interval"]
     lines = [
         f"derivative re-fit ({refit['method']}, {refit['training_runs']} training runs; the most a "
-        f"linear re-fit closes on test runs: {refit['closure_test']:.3f} [{low:.3f}, {high:.3f}]):"
+        f"linear re-fit closes on test runs: {refit['closure_test']:.3f} [{low:.3f}, {high:.3f}], on its "
+        f"training runs {refit['closure_training']:.3f}):",
+        f"  left by it on test runs: {refit['remainder_fraction_test']:.3f} of the baseline's gap, the nonlinear "
+        "remainder and noise (a linear model cannot close it; the sparse-regression pointer reads it)",
     ]
     if not refit["supported_by_test_runs"]:
         lines.append(
