@@ -50,7 +50,7 @@ class JointRefit:
     message: str
 
 
-def model_at(
+def _model_at(
     spec: StateSpaceModelSpec,
     constants: Mapping[str, float],
     baseline: LinearFlightModel,
@@ -90,7 +90,7 @@ def refit_jointly(
 
     def data_rows(vector: np.ndarray) -> np.ndarray:
         rows = residual_rows(
-            model_at(spec, constants, baseline, dict(zip(names, vector, strict=True)))
+            _model_at(spec, constants, baseline, dict(zip(names, vector, strict=True)))
         )
         if not (np.all(np.isfinite(rows)) and np.max(np.abs(rows)) <= limit):
             return np.full(sum(sizes), limit)
@@ -108,5 +108,5 @@ def refit_jointly(
     runs = len(training)
     middle = scores.T @ scores * runs / max(runs - 1, 1)
     covariance = bread @ middle @ bread
-    model = model_at(spec, constants, baseline, dict(zip(names, values, strict=True)))
+    model = _model_at(spec, constants, baseline, dict(zip(names, values, strict=True)))
     return JointRefit(names, values, covariance, model, bool(fit.success), str(fit.message))

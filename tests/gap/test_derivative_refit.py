@@ -30,7 +30,7 @@ def test_the_refit_moves_the_wrong_derivative_and_closes_the_gap_on_test_runs(
     refit = refit_derivatives(
         model, model.constants, baseline, runs[:4], runs[4:], weighted, seed=1
     )
-    assert refit["method"].startswith("weighted output error over the training manoeuvres jointly")
+    assert refit["method"].startswith("weighted output error over the training runs jointly")
     mq = refit["derivatives"]["Mq"]
     assert "Mq" in refit["moved"]
     # the average of 4 runs at 3 % noise pins M_q to a few percent; 10 % leaves room for the
