@@ -16,7 +16,9 @@ or a derivative-level candidate (:mod:`ornitail.gap.derivative_candidates`: the 
 change)
 rather than a wrong measurement effect; and for named effects how often a fresh flight's closure
 (another noise and gust seed; the diagnosis' model and channel weights) lies inside the reported
-90 % interval (semi-real: one record, no fresh flight).
+90 % interval (semi-real: one record, no fresh flight). The semi-real and independent cases also
+run the derivative re-fit (docs/gap-diagnosis.md, Method step 7): how often its moves are supported
+by the test runs, and its median closure there.
 
 ``python benchmarks/gap_realities.py [--sim-cases 10] [--independent-cases 12] [--seed 2018]
 [--out result.json] [--validation first-fold]``
@@ -107,9 +109,21 @@ def _within(result: dict[str, object], fresh: float) -> None:
     result["fresh_within_prediction_interval"] = bool(fresh_low <= fresh <= fresh_high)
 
 
-def _spec(path: Path, validation: str) -> BaselineSpec:
-    """The baseline file at ``path`` with ``validation`` as its validation design."""
-    return dataclasses.replace(read_baseline_spec(path), validation=validation)
+def _spec(path: Path, validation: str, derivative_refit: bool = False) -> BaselineSpec:
+    """The baseline file at ``path`` with ``validation`` as its validation design (and the
+    derivative re-fit asked for when ``derivative_refit``)."""
+    spec = dataclasses.replace(read_baseline_spec(path), validation=validation)
+    return dataclasses.replace(spec, derivative_refit=derivative_refit or spec.derivative_refit)
+
+
+def _refit_fields(report: dict) -> dict[str, object]:
+    """The derivative re-fit's findings kept per case (docs/gap-diagnosis.md, Method step 7)."""
+    refit = report["derivative_refit"]
+    return {
+        "refit_moved": refit.get("moved"),
+        "refit_closure_test": refit.get("closure_test"),
+        "refit_supported": refit.get("supported_by_test_runs", False),
+    }
 
 
 def sim_part(
@@ -149,7 +163,9 @@ def independent_part(
         case = independent_reality.draw_case(index, seed)
         with tempfile.TemporaryDirectory(prefix="ornitail-gap-") as folder:
             log_path, spec_path = independent_reality.write_case(case, Path(folder))
-            diagnosis = diagnose_flight(_spec(spec_path, validation), [log_path], seed=seed)
+            diagnosis = diagnose_flight(
+                _spec(spec_path, validation, derivative_refit=True), [log_path], seed=seed
+            )
             expected = independent_reality.IN_LIBRARY.get(case.effect)
             result = _outcome(
                 diagnosis.report,
@@ -158,6 +174,7 @@ def independent_part(
                 case.effect == "none" or expected is not None,
             )
             result["effect"], result["magnitude"] = case.effect, case.magnitude
+            result |= _refit_fields(diagnosis.report)
             if diagnosis.report["verdict"] == "effect":
                 fresh_case = type(case)(case.effect, case.magnitude, case.seed + 1)
                 fresh_log, _ = independent_reality.write_case(fresh_case, Path(folder) / "fresh")
@@ -181,9 +198,7 @@ def semi_real_part(
             expected, magnitude = case.expected
             result = _outcome(report, expected, magnitude, True)
             result["effect"], result["magnitude"] = case.effect, case.magnitude
-            refit = report["derivative_refit"]
-            result["refit_moved"] = refit.get("moved")
-            result["refit_closure_test"] = refit.get("closure_test")
+            result |= _refit_fields(report)
             results.append(result)
             tick(
                 f"semi-real {index + 1}/{len(SEMI_REAL_CASES)}: {case.effect} -> {report['verdict']}"
@@ -206,8 +221,16 @@ def summarise(results: list[dict[str, object]]) -> dict[str, object]:
     predicted = [
         r["fresh_within_prediction_interval"] for r in results if "fresh_within_interval" in r
     ]
+    refits = [r for r in results if "refit_supported" in r]
+    refit_closures = [
+        r["refit_closure_test"] for r in refits if r["refit_closure_test"] is not None
+    ]
     return {
         "cases": len(results),
+        "derivative_refit_supported_by_test_runs": _rate([r["refit_supported"] for r in refits]),
+        "derivative_refit_closure_test_median": float(np.median(refit_closures))
+        if refit_closures
+        else None,
         "false_alarms_on_no_effect": _rate([r["verdict"] == "effect" for r in none_cases]),
         "unexplained_on_no_effect": _rate([r["verdict"] == "unexplained" for r in none_cases]),
         "named_in_library": _rate(named),

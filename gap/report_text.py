@@ -33,10 +33,14 @@ def derivative_refit_lines(refit: dict[str, Any] | None) -> list[str]:
         f"derivative re-fit ({refit['method']}, {refit['training_runs']} training runs; the most a "
         f"linear re-fit closes on test runs: {refit['closure_test']:.3f} [{low:.3f}, {high:.3f}], on its "
         f"training runs {refit['closure_training']:.3f}):",
-        f"  left by it on test runs: {refit['remainder_fraction_test']:.3f} of the baseline's gap, the nonlinear "
-        "remainder and noise (a linear model cannot close it; the sparse-regression pointer reads it)",
     ]
-    if not refit["supported_by_test_runs"]:
+    if refit["supported_by_test_runs"]:
+        lines.append(
+            f"  left by it on test runs: {refit['remainder_fraction_test']:.3f} of the baseline's gap, the "
+            "nonlinear remainder and noise that no change of the derivatives took up (the sparse-regression "
+            "pointer below reads it)"
+        )
+    else:
         lines.append(
             "  not supported by the test runs: the re-fit predicts them no better than the baseline, so the moves "
             "(*) fit the training runs only and do not say where the model is wrong"

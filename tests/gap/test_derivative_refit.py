@@ -39,6 +39,9 @@ def test_the_refit_moves_the_wrong_derivative_and_closes_the_gap_on_test_runs(
     assert mq["change_interval"][0] < true_mq - mq["baseline"] < mq["change_interval"][1]
     assert refit["closure_test"] > 0.8  # the residual left is the noise
     assert refit["supported_by_test_runs"] is True
+    assert refit["remainder_fraction_test"] == pytest.approx(1 - refit["closure_test"])
+    text = "\n".join(derivative_refit_lines(refit))
+    assert "left by it on test runs" in text and "not supported" not in text
 
 
 def test_a_refit_that_does_not_predict_the_test_runs_says_its_moves_are_not_supported(
