@@ -263,3 +263,50 @@ def flight_overlay_picture(
     """Write ``flight_overlay.png/.pdf`` (:func:`flight_overlay_figure`); return the paths."""
     figure = flight_overlay_figure(time_s, measured, baseline, corrected, label, effect, channels)
     return _save(figure, folder, "flight_overlay")
+
+
+def derivative_refit_figure(refit: dict[str, Any]) -> plt.Figure:
+    """Each re-fitted derivative's change relative to its baseline value (-) with its 90 % interval;
+    moved ones (interval excluding zero) in red; a derivative whose baseline is 0 has no relative
+    scale and is listed with its change in its own unit instead of drawn."""
+    items = list(refit["derivatives"].items())
+    figure, axis = plt.subplots(figsize=(8, 0.4 * len(items) + 1.6))
+    positions = np.arange(len(items))[::-1]
+    labels = []
+    for position, (name, item) in zip(positions, items, strict=True):
+        scale = abs(item["baseline"])
+        if scale == 0:
+            labels.append(f"{name} (baseline 0: {item['change']:+.3g} {item['unit']})")
+            continue
+        labels.append(name)
+        low, high = (bound / scale for bound in item["change_interval"])
+        centre = item["change"] / scale
+        axis.errorbar(
+            centre,
+            position,
+            xerr=[[centre - low], [high - centre]],
+            fmt="o",
+            color="tab:red" if item["moved"] else "tab:gray",
+            capsize=3,
+        )
+    axis.set_yticks(positions, labels, fontsize=8)
+    axis.axvline(0.0, color="black", linewidth=0.8)
+    # linear within +-100 % of the baseline value, logarithmic beyond: a poorly determined derivative
+    # (intervals of +-1000 %) must not flatten the ones the runs pin down
+    axis.set_xscale("symlog", linthresh=1.0)
+    axis.set_xlabel("change / |baseline value| (-), 90 % interval; linear within +-1, log beyond")
+    axis.set_ylabel("derivative of the baseline model")
+    low, high = refit["closure_interval"]
+    support = "supported by" if refit["supported_by_test_runs"] else "NOT supported by"
+    axis.set_title(
+        f"derivative re-fit (red: moved)\ntest closure {refit['closure_test']:.2f} "
+        f"[{low:.2f}, {high:.2f}], {support} the test runs",
+        fontsize=9,
+    )
+    figure.tight_layout()
+    return figure
+
+
+def derivative_refit_picture(refit: dict[str, Any], folder: Path) -> list[str]:
+    """Write ``derivative_refit.png/.pdf`` (:func:`derivative_refit_figure`); return the paths."""
+    return _save(derivative_refit_figure(refit), folder, "derivative_refit")

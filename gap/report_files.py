@@ -13,6 +13,7 @@ from ornitail.core.output import to_jsonable
 from ornitail.gap.flight_diagnosis import FlightDiagnosis, diagnose_flight, residuals_of
 from ornitail.gap.model_spec import read_baseline_spec
 from ornitail.gap.plots import (
+    derivative_refit_picture,
     flight_overlay_picture,
     localisation_picture,
     ranking_picture,
@@ -52,6 +53,9 @@ def _flight_pictures(diagnosis: FlightDiagnosis, folder: Path) -> list[str]:
         folder,
         channels,
     )
+    refit = diagnosis.report.get("derivative_refit")
+    if refit and refit["derivatives"]:
+        written += derivative_refit_picture(refit, folder)
     return written
 
 

@@ -1,6 +1,8 @@
 """Derivative-level re-identification (gap/derivative_refit.py) on manoeuvres flown by a known
 linear model: it finds the derivative the baseline got wrong and closes the gap on other runs."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -9,6 +11,7 @@ from ornitail.gap.derivative_refit import refit_derivatives
 from ornitail.gap.flight_candidates import baseline_flight_model
 from ornitail.gap.flight_diagnosis import residuals_of
 from ornitail.gap.model_spec import BaselineSpec
+from ornitail.gap.plots import derivative_refit_figure, derivative_refit_picture
 from ornitail.gap.report_text import derivative_refit_lines
 
 
@@ -105,3 +108,39 @@ def test_the_refit_intervals_hold_every_derivatives_true_change_at_their_nominal
             low, high = item["change_interval"]
             held.append(low <= truth_values[name] - start[name] <= high)
     assert 0.80 <= np.mean(held) <= 0.97
+
+
+def test_the_refit_picture_shows_each_derivatives_relative_change_and_lists_a_zero_baseline(
+    fly_linear_manoeuvres, tmp_path
+):
+    spec = BaselineSpec("linear_model", model="delfly_longitudinal")
+    model = load_model(spec.model)
+    baseline = baseline_flight_model(spec)
+    numeric = model.state_space(
+        {**model.start_values(), "Mq": 1.5 * model.start_values()["Mq"]}, model.constants
+    )
+    runs = fly_linear_manoeuvres(baseline.with_matrices(numeric.a_matrix, numeric.b_matrix), 6, 3)
+    scales = np.concatenate([run.outputs for run in runs]).std(axis=0)
+    refit = refit_derivatives(
+        model,
+        model.constants,
+        baseline,
+        runs[:4],
+        runs[4:],
+        lambda candidate, some: [r / scales for r in residuals_of(candidate, some)],
+        seed=1,
+    )
+    refit["derivatives"]["Zde"] = {**refit["derivatives"]["Zde"], "baseline": 0.0}
+    figure = derivative_refit_figure(refit)
+    axis = figure.axes[0]
+    labels = [label.get_text() for label in axis.get_yticklabels()]
+    assert "Mq" in labels and any(label.startswith("Zde (baseline 0:") for label in labels)
+    assert "N/rad" in next(label for label in labels if label.startswith("Zde"))
+    assert "(-)" in axis.get_xlabel()
+    drawn = [container.lines[0] for container in axis.containers]  # one error bar each
+    assert len(drawn) == len(refit["derivatives"]) - 1  # every derivative but the zero-baseline one
+    red = [line for line in drawn if line.get_color() == "tab:red"]
+    assert len(red) == len([n for n in refit["moved"] if n != "Zde"])
+    written = derivative_refit_picture(refit, tmp_path)
+    assert sorted(Path(path).suffix for path in written) == [".pdf", ".png"]
+    assert all(Path(path).stat().st_size > 0 for path in written)
