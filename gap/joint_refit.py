@@ -7,7 +7,8 @@ never below zero, and its closure on test runs is comparable with a candidate's.
 fit of the runs' time average it replaces weighted the channels by its own residual variances and
 estimated an initial state the runs' scoring does not: on flapper B it mostly did not converge in 100
 iterations, and where it did, on a static-stability flight, its seven "moved" derivatives closed
--0.004 on the test runs; fitted jointly, the same runs give 0.39.) It lives here rather than in the
+-0.004 on the test runs; fitted jointly, the same training runs close 0.47 on themselves and 0.17
+on those test runs, and another split's 0.39.) It lives here rather than in the
 flight package's estimator because it must see the runs exactly as the candidates do: simulated by
 :func:`ornitail.gap.flight_model.simulate_runs` (the runs' own initial states, input history,
 delays and filters) and weighed by the diagnosis' fixed noise levels, where the flight package fits
@@ -16,7 +17,8 @@ one record and estimates its own noise covariance (maximum likelihood).
 Every derivative is free (no prior): where one doublet shape does not determine a derivative, its
 interval says so by its width. (A prior of each derivative's own size was tried as mixed
 estimation: with the residuals in noise-level units rather than the noise's own, it outweighed the
-data and kept flapper B's static-stability re-fit at a test closure of 0.015, against 0.39 free.)
+data and kept flapper B's static-stability re-fit (the other split) at a test closure of 0.015, against 0.39
+free.)
 
 *Covariance*: clustered by run, (J^T J)^-1 [sum_r s_r s_r^T R / (R - 1)] (J^T J)^-1 with s_r run
 r's score J_r^T e_r (centred over the runs) and R runs: the residuals within a run are strongly
