@@ -80,7 +80,8 @@ def refit_jointly(
     training: Sequence[FlightRun],
     weighted_residuals: Callable[[LinearFlightModel, Sequence[FlightRun]], list[np.ndarray]],
 ) -> JointRefit:
-    """Weighted least-squares derivatives over ``training`` (module docstring);
+    """Weighted least-squares derivatives over ``training``, within the model file's bounds (module
+    docstring);
     ``weighted_residuals(model, runs)`` gives each run's residual (samples, outputs) divided by the
     diagnosis' noise levels."""
     start = spec.start_values()
@@ -102,14 +103,23 @@ def refit_jointly(
             return np.full(sum(sizes), limit)
         return rows
 
+    bounds = (
+        [spec.parameter(name).lower for name in names],
+        [spec.parameter(name).upper for name in names],
+    )  # the model file's own (infinite when it gives none)
     fit = least_squares(
-        data_rows, start_vector, x_scale="jac", method="trf", max_nfev=200 * len(names)
+        data_rows,
+        start_vector,
+        bounds=bounds,
+        x_scale="jac",
+        method="trf",
+        max_nfev=200 * len(names),
     )
     values = fit.x
     jacobian, residual = fit.jac, fit.fun
     bread = np.linalg.pinv(jacobian.T @ jacobian)
-    bounds = zip(np.cumsum([0, *sizes[:-1]]), np.cumsum(sizes), strict=True)
-    scores = np.array([jacobian[first:last].T @ residual[first:last] for first, last in bounds])
+    ends = zip(np.cumsum([0, *sizes[:-1]]), np.cumsum(sizes), strict=True)
+    scores = np.array([jacobian[first:last].T @ residual[first:last] for first, last in ends])
     scores -= scores.mean(axis=0)  # zero at the optimum; centred in case the fit stopped short
     runs = len(training)
     middle = scores.T @ scores * runs / max(runs - 1, 1)
