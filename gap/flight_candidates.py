@@ -92,7 +92,7 @@ def model_constants(
     return {**model.constants, **(data_constants or {})}
 
 
-def _from_state_space(
+def model_matrices(
     model: StateSpaceModelSpec, values: Mapping[str, float], constants: Mapping[str, float]
 ) -> dict[str, np.ndarray]:
     """A, B, C, D of ``model`` at these parameter and constant values, as model fields."""
@@ -130,7 +130,7 @@ def baseline_flight_model(
     constants = model_constants(spec, data_constants)
     airspeed = math.hypot(constants.get("u0", math.nan), constants.get("w0", math.nan))
     return LinearFlightModel(
-        **_from_state_space(model, model.start_values(), constants),
+        **model_matrices(model, model.start_values(), constants),
         iyy_kg_m2=float(constants.get("Iyy", math.nan)),
         mass_kg=float(constants.get("m", math.nan)),
         theta0_rad=float(constants.get("theta0", math.nan)),
@@ -202,7 +202,7 @@ def _model_derivatives(
     def rebuilt(
         new_values: Mapping[str, float], new_constants: Mapping[str, float]
     ) -> LinearFlightModel:
-        return replace(baseline, **_from_state_space(model, new_values, new_constants))
+        return replace(baseline, **model_matrices(model, new_values, new_constants))
 
     return model_derivatives(model, constants, baseline, rebuilt)
 

@@ -37,6 +37,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ornitail.flight.model_file import StateSpaceModelSpec
+from ornitail.gap.flight_candidates import model_matrices
 from ornitail.gap.flight_data import FlightRun
 from ornitail.gap.flight_model import LinearFlightModel
 
@@ -63,14 +64,7 @@ def _model_at(
     values: Mapping[str, float],
 ) -> LinearFlightModel:
     """``baseline`` with the model file's matrices at ``values`` (other parameters at their start)."""
-    numeric = spec.state_space({**spec.start_values(), **values}, constants)
-    return replace(
-        baseline,
-        a_matrix=numeric.a_matrix,
-        b_matrix=numeric.b_matrix,
-        c_matrix=numeric.c_matrix,
-        d_matrix=numeric.d_matrix,
-    )
+    return replace(baseline, **model_matrices(spec, {**spec.start_values(), **values}, constants))
 
 
 def refit_jointly(
