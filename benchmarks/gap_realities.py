@@ -109,11 +109,9 @@ def _within(result: dict[str, object], fresh: float) -> None:
     result["fresh_within_prediction_interval"] = bool(fresh_low <= fresh <= fresh_high)
 
 
-def _spec(path: Path, validation: str, derivative_refit: bool = False) -> BaselineSpec:
-    """The baseline file at ``path`` with ``validation`` as its validation design (and the
-    derivative re-fit asked for when ``derivative_refit``)."""
-    spec = dataclasses.replace(read_baseline_spec(path), validation=validation)
-    return dataclasses.replace(spec, derivative_refit=derivative_refit or spec.derivative_refit)
+def _spec(path: Path, validation: str) -> BaselineSpec:
+    """The baseline file at ``path`` with ``validation`` as its validation design."""
+    return dataclasses.replace(read_baseline_spec(path), validation=validation)
 
 
 def _refit_fields(report: dict) -> dict[str, object]:
@@ -163,9 +161,7 @@ def independent_part(
         case = independent_reality.draw_case(index, seed)
         with tempfile.TemporaryDirectory(prefix="ornitail-gap-") as folder:
             log_path, spec_path = independent_reality.write_case(case, Path(folder))
-            diagnosis = diagnose_flight(
-                _spec(spec_path, validation, derivative_refit=True), [log_path], seed=seed
-            )
+            diagnosis = diagnose_flight(_spec(spec_path, validation), [log_path], seed=seed)
             expected = independent_reality.IN_LIBRARY.get(case.effect)
             result = _outcome(
                 diagnosis.report,

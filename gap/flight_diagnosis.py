@@ -468,6 +468,19 @@ def diagnose_flight(
     pointer = sparse_pointer(split.training, baseline)
     order = np.concatenate([part.test for part in splits])
     counts = np.array([len(runs[i].time_s) for i in order], dtype=float)
+    refit = (
+        refit_derivatives(
+            load_model(spec.model),
+            record.constants,
+            baseline,
+            split.training,
+            first_test,
+            lambda model, runs: [residual / scales for residual in residuals_of(model, runs)],
+            seed,
+        )
+        if spec.derivative_refit
+        else None
+    )
     before_sse = _channel_sse([all_residuals[i] for i in order], scales)
     report = assemble_report(
         kind="flight",
@@ -490,22 +503,10 @@ def diagnose_flight(
                 np.sum(before_sse * (scales / signal_scales) ** 2) / (counts.sum() * len(channels))
             )
         ),
+        derivative_refit=refit,
     )
     report["second_effect"] = _second_effect(second, chosen_model, first_test, scales, seed)
     report["candidates_skipped"] = candidates.skipped
-    report["derivative_refit"] = (
-        refit_derivatives(
-            load_model(spec.model),
-            record.constants,
-            baseline,
-            split.training,
-            first_test,
-            lambda model, runs: [residual / scales for residual in residuals_of(model, runs)],
-            seed,
-        )
-        if spec.derivative_refit
-        else None
-    )
     step(total_steps, "localised and reported")
     return FlightDiagnosis(
         report,

@@ -9,7 +9,7 @@ effects_off = ["added_mass"]    # simulator effects the baseline leaves out
 # model = "delfly_longitudinal" # linear_model: preset or flight model file (its start values)
 # candidates = ["added_mass", "input_delay"]   # optional: restrict the library
 # segment_s = 1.0               # linear_model: cut logs into segments of this many seconds
-# derivative_refit = true       # linear_model: also re-fit the model's own derivatives
+# derivative_refit = false      # linear_model: skip the re-fit of the model's own derivatives (default: true)
 # validation = "first-fold"     # rank and detect on the first fold's validation runs only (default: all-folds)
 ```
 
@@ -48,8 +48,14 @@ class BaselineSpec:
     candidates: tuple[str, ...] = ()
     source: str = "baseline"
     segment_s: float | None = None  # linear_model: logs cut into segments of this length (s)
-    derivative_refit: bool = False  # linear_model: re-fit the model's derivatives too
+    derivative_refit: bool | None = (
+        None  # re-fit the model's derivatives too; None: yes for a linear_model
+    )
     validation: str = "all-folds"  # one of VALIDATION_DESIGNS
+
+    def __post_init__(self) -> None:
+        if self.derivative_refit is None:
+            object.__setattr__(self, "derivative_refit", self.kind == "linear_model")
 
 
 def _names(table: TomlTable, key: str, known: tuple[str, ...] | None) -> tuple[str, ...]:
@@ -99,9 +105,9 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
     if tail is not None:
         study_tail_geometry(tail, where=table.where("tail"))
     segment_s = table.number("segment_s", None, positive=True)
-    refit = table.boolean("derivative_refit", False)
+    refit = table.boolean("derivative_refit", None)
     validation = table.text("validation", "all-folds", choices=VALIDATION_DESIGNS)
-    for key, given in (("segment_s", segment_s is not None), ("derivative_refit", refit)):
+    for key, given in (("segment_s", segment_s is not None), ("derivative_refit", bool(refit))):
         if given and kind != "linear_model":
             raise UserInputError(table.where(key), "only for kind = linear_model (a model file)")
     model = ""
@@ -135,8 +141,8 @@ def write_baseline_spec(spec: BaselineSpec, path: str | Path) -> Path:
     lines.append("effects_off = [" + ", ".join(f'"{name}"' for name in spec.effects_off) + "]")
     if spec.segment_s is not None:
         lines.append(f"segment_s = {spec.segment_s:g}")
-    if spec.derivative_refit:
-        lines.append("derivative_refit = true")
+    if spec.kind == "linear_model" and not spec.derivative_refit:
+        lines.append("derivative_refit = false")
     if spec.validation != "all-folds":
         lines.append(f'validation = "{spec.validation}"')
     if spec.model:

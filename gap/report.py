@@ -38,6 +38,7 @@ def assemble_report(
     pointer: dict[str, object],
     seed: int,
     verdict_gap: float | None = None,
+    derivative_refit: dict[str, object] | None = None,
 ) -> dict[str, object]:
     """The report's JSON fields (docs/gap-diagnosis.md) from the pieces of a diagnosis.
 
@@ -46,17 +47,19 @@ def assemble_report(
     (runs, channels) of the baseline and of the top-ranked effect (fitted without them, chosen
     without them); ``sample_counts`` the samples per test run. ``verdict_gap`` is the baseline gap
     in units of the measured signals' standard deviation that the ``unexplained`` rule reads
-    (default: ``gap_before``, when the channels were normalised that way).
+    (default: ``gap_before``, when the channels were normalised that way). ``derivative_refit`` is
+    the re-fit of the model's derivatives (None when not done), which the verdict also reads.
     """
     top = ranking.entries[0]
     gap_before = gap_with_interval(before_sse, sample_counts, channels, seed)
     gap_after = gap_with_interval(after_sse, sample_counts, channels, seed)
     run_before, run_after = before_sse.sum(axis=1), after_sse.sum(axis=1)
     realised, interval = closure_with_interval(run_before, run_after, seed)
-    verdict = verdict_of(
+    verdict, verdict_basis = verdict_of(
         ranking,
         gap_before["total"] if verdict_gap is None else verdict_gap,
         where["input_locked_fraction"],
+        derivative_refit,
     )
     return {
         "format": "ornitail gap diagnosis",
@@ -82,6 +85,7 @@ def assemble_report(
         "split": split,
         "detection_rule": rule.as_report(),
         "verdict": verdict,
+        "verdict_basis": verdict_basis or None,
         "effect": top.name if verdict == "effect" else None,
         "indistinguishable_set": list(ranking.top_set) if verdict == "effect" else [],
         "confidence": ranking.top_set_confidence if verdict == "effect" else None,
@@ -116,4 +120,5 @@ def assemble_report(
         ],
         "where": where,
         "sparse_regression": pointer,
+        "derivative_refit": derivative_refit,
     }

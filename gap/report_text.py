@@ -22,6 +22,19 @@ def magnitude_text(magnitude: dict[str, Any]) -> str:
     return f"{prefix}{magnitude['value']:.4g} {magnitude['unit']}{edge}"
 
 
+def _strongest_moves(refit: dict[str, Any]) -> str:
+    """The moved derivatives, the change furthest from zero in its interval's half-widths first."""
+
+    def strength(item: dict[str, Any]) -> float:
+        low, high = item["change_interval"]
+        return abs(item["change"]) / max((high - low) / 2, 1e-300)
+
+    moved = [(strength(item), name) for name, item in refit["derivatives"].items() if item["moved"]]
+    if not moved:
+        return "no single one's interval apart from zero"
+    return "moved, strongest first: " + ", ".join(name for _, name in sorted(moved, reverse=True))
+
+
 def derivative_refit_lines(refit: dict[str, Any] | None) -> list[str]:
     """The derivative re-fit (docs/gap-diagnosis.md, Method step 7) as text; none when not asked."""
     if not refit:
@@ -92,6 +105,13 @@ def render_report(report: dict[str, Any]) -> str:
                 f"{{{', '.join(second['indistinguishable_set'])}}}, closes a further "
                 f"{second['closure_beyond_first']:.3f} of the remaining gap on the test runs)"
             )
+    elif report.get("verdict_basis") == "derivative_refit":
+        refit = report["derivative_refit"]
+        lines.append(
+            "effect: unexplained by any named effect, but a re-fit of the model's derivatives closes "
+            f"{refit['closure_test']:.3f} of the gap on test runs it did not see: its derivatives are off "
+            f"({_strongest_moves(refit)}; see the derivative re-fit below)"
+        )
     elif report["verdict"] == "unexplained":
         lines.append(
             "effect: unexplained (no candidate closes the gap; see the sparse-regression pointer)"
