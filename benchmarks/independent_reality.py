@@ -47,6 +47,7 @@ Effects (the ``effect`` of a :class:`RealityCase`, magnitude ``k``):
 
 from __future__ import annotations
 
+import argparse
 import math
 import sys
 from dataclasses import dataclass
@@ -420,9 +421,19 @@ def draw_case(index: int, seed: int) -> RealityCase:
     return RealityCase(effect, float(generator.uniform(low, high)), int(generator.integers(2**31)))
 
 
-if __name__ == "__main__":
-    out = Path(sys.argv[1] if len(sys.argv) > 1 else "independent-reality")
+def main(argv: list[str] | None = None) -> int:
+    """Write one case of every effect (at the middle of its range) under the folder given."""
+    parser = argparse.ArgumentParser(
+        description="write one flapper B flight of each effect, with its model and baseline files"
+    )
+    parser.add_argument("out", nargs="?", default="independent-reality", help="folder to write")
+    out = Path(parser.parse_args(argv).out)
     for number, name in enumerate(EFFECTS):
         low, high = MAGNITUDE_RANGES.get(name, (0.0, 0.0))
         written = write_case(RealityCase(name, 0.5 * (low + high), seed=number), out / name)
         print(name, *written)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
