@@ -5,11 +5,14 @@ model" counterpart of the measurement and simulator effects:
 
 | name | simulator (states q, u, w, theta; dimensional, SI) | model file (its parameter or constant) |
 |---|---|---|
-| ``pitch_damping`` | M_q + k (N m s/rad) | ``Mq`` + k |
-| ``static_stability`` | M_w + k (N s) | ``Mw`` (or ``Ma``, ``Malpha``) + k |
-| ``speed_stability`` | M_u + k (N s) | ``Mu`` + k |
-| ``heave_damping`` | Z_w + k (N s/m) | ``Zw`` (or ``Za``, ``Zalpha``) + k |
-| ``control_power`` | M_de + k (N m/rad) | ``Mde`` + k |
+| ``pitch_damping`` | M_q + k (N m s/rad) | ``Mq`` (or ``Cmq``) + k |
+| ``static_stability`` | M_w + k (N s) | ``Mw`` (or ``Ma``, ``Malpha``, ``Cma``, ``Cmalpha``) + k |
+| ``speed_stability`` | M_u + k (N s) | ``Mu`` (or ``Cmu``) + k |
+| ``heave_damping`` | Z_w + k (N s/m) | ``Zw`` (or ``Za``, ``Zalpha``, ``CZa``, ``CZalpha``, ``Cza``, ``Czalpha``) + k |
+| ``control_power`` | M_de + k (N m/rad) | ``Mde`` (or ``Mdeltae``, ``Mdelta``, ``Meta``, ``Cmde``, ``Cmdeltae``) + k |
+
+A model file's parameter is matched with its underscores left out, so ``M_q``, ``M_alpha``, ``Cm_alpha`` or
+``M_delta_e`` are found too; the first of the file's parameters that matches is the one acted on.
 | ``iyy_shift`` | q-row of A and B / (1 + k) | constant ``Iyy`` x (1 + k) |
 | ``heave_added_mass`` | w-row of A and B / (1 + k) | the same, when the model has a state ``w`` |
 
@@ -21,7 +24,7 @@ the whole w-row is divided by 1 + k, k = m_a / m (its pitching counterpart M_wdo
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from functools import lru_cache
 
 import numpy as np
@@ -34,13 +37,22 @@ INERTIA_BOUNDS = (-0.5, 2.0)  # fraction: an inertia from half to three times th
 DERIVATIVE_RANGE = 3.0  # a derivative ranges over +- this many times its baseline value
 
 MODEL_PARAMETERS: dict[str, tuple[str, ...]] = {
-    "pitch_damping": ("Mq",),
-    "static_stability": ("Mw", "Ma", "Malpha"),
-    "speed_stability": ("Mu",),
-    "heave_damping": ("Zw", "Za", "Zalpha"),
-    "control_power": ("Mde",),
+    "pitch_damping": ("Mq", "Cmq"),
+    "static_stability": ("Mw", "Ma", "Malpha", "Cma", "Cmalpha"),
+    "speed_stability": ("Mu", "Cmu"),
+    "heave_damping": ("Zw", "Za", "Zalpha", "CZa", "CZalpha", "Cza", "Czalpha"),
+    "control_power": ("Mde", "Mdeltae", "Mdelta", "Meta", "Cmde", "Cmdeltae"),
 }
-"""Candidate name -> the model-file parameter names it acts on (the first the file names)."""
+"""Candidate name -> the model-file parameter names it acts on, underscores left out (module
+docstring)."""
+
+
+def model_parameter_for(candidate: str, parameter_names: Sequence[str]) -> str | None:
+    """The model file's parameter that ``candidate`` acts on (the first whose name, underscores
+    left out, is one of :data:`MODEL_PARAMETERS`), or None."""
+    spellings = MODEL_PARAMETERS[candidate]
+    return next((name for name in parameter_names if name.replace("_", "") in spellings), None)
+
 
 SIMULATOR_ENTRIES: dict[str, tuple[str, str, int, int, str]] = {
     "pitch_damping": ("M_q", "a", 0, 0, "N m s/rad"),
@@ -139,9 +151,11 @@ def model_derivatives(
     else:
         skipped["iyy_shift"] = f"{model.name} declares no constant Iyy (pitch inertia)"
     for name, parameters in MODEL_PARAMETERS.items():
-        parameter = next((p for p in parameters if p in model.parameter_names), None)
+        parameter = model_parameter_for(name, model.parameter_names)
         if parameter is None:
-            skipped[name] = f"{model.name} has no parameter {' or '.join(parameters)}"
+            skipped[name] = (
+                f"{model.name} has no parameter {' or '.join(parameters[:3])} (or the like)"
+            )
             continue
         if values[parameter] == 0.0:
             skipped[name] = f"{model.name}'s {parameter} starts at 0: no scale for its range"

@@ -2,6 +2,9 @@
 names, by its dimensional amount, and a diagnosis of manoeuvres flown with that derivative changed
 names it with its size."""
 
+import re
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -86,3 +89,37 @@ def test_a_changed_derivative_is_named_with_its_size(
     assert top.name == name and ranking.detected
     assert top.heldout_closure > rule.threshold
     assert top.magnitude == pytest.approx(true_change, rel=0.05)
+
+
+def test_a_model_file_that_spells_its_derivatives_with_underscores_gets_their_candidates(tmp_path):
+    """The Twin Otter's file with Ma, Mq, Mde and Za spelled M_alpha, M_q, M_delta_e and Z_alpha:
+    the same four derivative candidates, each acting on the renamed parameter."""
+    text = (Path(load_model("twin_otter_short_period").source)).read_text()
+    for old, new in (("Ma", "M_alpha"), ("Mq", "M_q"), ("Mde", "M_delta_e"), ("Za", "Z_alpha")):
+        text = re.sub(rf"\b{old}\b", new, text)
+    (tmp_path / "renamed.toml").write_text(text)
+    names = {}
+    for model in ("twin_otter_short_period", str(tmp_path / "renamed.toml")):
+        spec = BaselineSpec("linear_model", model=model)
+        airspeed = {"V": 50.0}  # m/s, the one constant the file takes from data
+        baseline = baseline_flight_model(spec, airspeed)
+        library = flight_candidates(spec, baseline, data_constants=airspeed)
+        names[model] = {
+            c.name: c.description
+            for c in library.candidates
+            if c.description.startswith("parameter")
+        }
+    original, renamed = names.values()
+    assert (
+        set(original)
+        == set(renamed)
+        == {
+            "pitch_damping",
+            "static_stability",
+            "heave_damping",
+            "control_power",
+        }
+    )
+    assert renamed["pitch_damping"] == "parameter M_q changed by k"
+    assert renamed["control_power"] == "parameter M_delta_e changed by k"
+    assert renamed["static_stability"] == "parameter M_alpha changed by k"
