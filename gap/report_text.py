@@ -68,6 +68,21 @@ def derivative_refit_lines(refit: dict[str, Any] | None) -> list[str]:
     return lines
 
 
+def _near_miss_lines(report: dict[str, Any]) -> list[str]:
+    """When no effect is named although the best candidate beats the null's 95th percentile: what
+    stopped it (its lower bound under the lower-bound threshold, e.g. the materiality floor)."""
+    rule, top = report["detection_rule"], report["ranking"][0]
+    if report["verdict"] == "effect" or top["validation_closure"] <= rule["threshold"]:
+        return []
+    magnitude = {"value": top["magnitude"], "unit": top["unit"], "at_bound": top["at_bound"]}
+    return [
+        f"  not named, though it beats the null: {top['name']} ({magnitude_text(magnitude)}) closes "
+        f"{top['validation_closure']:.3f} on validation runs, above the null's {rule['threshold']:.3f}, but "
+        f"its lower bound {top['simultaneous_lower_bound']:.3f} is under {rule['lower_bound_threshold']:.3f}; "
+        f"on test runs it closes {report['closure']['realised_test']:.3f} (how far, below)"
+    ]
+
+
 def render_report(report: dict[str, Any]) -> str:
     """Readable summary: verdict, where, ranking, how far the gap shrinks, the sparse pointer."""
     runs = report["runs"]
@@ -117,7 +132,8 @@ def render_report(report: dict[str, Any]) -> str:
             "effect: unexplained (no candidate closes the gap; see the sparse-regression pointer)"
         )
     else:
-        lines.append("effect: none (no candidate closes a significant part of the gap)")
+        lines.append("effect: none (no candidate passes the detection rule, and the gap shows no systematic part)")
+    lines += _near_miss_lines(report)
     lines.append("where:")
     lines += [f"  {sentence}" for sentence in report["where"]["summary"]]
     lines.append(
