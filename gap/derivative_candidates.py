@@ -10,11 +10,11 @@ model" counterpart of the measurement and simulator effects:
 | ``speed_stability`` | M_u + k (N s) | ``Mu`` (or ``Cmu``) + k |
 | ``heave_damping`` | Z_w + k (N s/m) | ``Zw`` (or ``Za``, ``Zalpha``, ``CZa``, ``CZalpha``, ``Cza``, ``Czalpha``) + k |
 | ``control_power`` | M_de + k (N m/rad) | ``Mde`` (or ``Mdeltae``, ``Mdelta``, ``Meta``, ``Cmde``, ``Cmdeltae``) + k |
+| ``iyy_shift`` | q-row of A and B / (1 + k) | constant ``Iyy`` x (1 + k) |
+| ``heave_added_mass`` | w-row of A and B / (1 + k) | the same, when the model has a state ``w`` |
 
 A model file's parameter is matched with its underscores left out, so ``M_q``, ``M_alpha``, ``Cm_alpha`` or
 ``M_delta_e`` are found too; the first of the file's parameters that matches is the one acted on.
-| ``iyy_shift`` | q-row of A and B / (1 + k) | constant ``Iyy`` x (1 + k) |
-| ``heave_added_mass`` | w-row of A and B / (1 + k) | the same, when the model has a state ``w`` |
 
 A derivative ranges over +-3 x its baseline value (a sign change and a tripling both inside); one
 whose baseline value is zero has no scale to range over and is skipped, saying so. Heave added mass

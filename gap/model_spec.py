@@ -48,9 +48,8 @@ class BaselineSpec:
     candidates: tuple[str, ...] = ()
     source: str = "baseline"
     segment_s: float | None = None  # linear_model: logs cut into segments of this length (s)
-    derivative_refit: bool | None = (
-        None  # re-fit the model's derivatives too; None: yes for a linear_model
-    )
+    # re-fit the model's derivatives too; None: yes for a linear_model
+    derivative_refit: bool | None = None
     validation: str = "all-folds"  # one of VALIDATION_DESIGNS
 
     def __post_init__(self) -> None:

@@ -132,7 +132,9 @@ def render_report(report: dict[str, Any]) -> str:
             "effect: unexplained (no candidate closes the gap; see the sparse-regression pointer)"
         )
     else:
-        lines.append("effect: none (no candidate passes the detection rule, and the gap shows no systematic part)")
+        lines.append(
+            "effect: none (no candidate passes the detection rule, and the gap shows no systematic part)"
+        )
     lines += _near_miss_lines(report)
     lines.append("where:")
     lines += [f"  {sentence}" for sentence in report["where"]["summary"]]

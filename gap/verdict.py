@@ -27,7 +27,7 @@ from ornitail.gap.ranking import Ranking
 UNEXPLAINED_GAP = 0.25
 
 
-def refit_is_material(refit: dict[str, Any] | None) -> bool:
+def _refit_is_material(refit: dict[str, Any] | None) -> bool:
     """Whether a derivative re-fit (the report's ``derivative_refit``) closes a material part of
     the gap on its test runs and is supported by them."""
     if not refit or refit.get("derivatives") is None:
@@ -47,6 +47,6 @@ def verdict_of(
         return "effect", "detection_rule"
     if gap_before * math.sqrt(max(input_locked_fraction, 0.0)) > UNEXPLAINED_GAP:
         return "unexplained", "input_locked_gap"
-    if refit_is_material(derivative_refit):
+    if _refit_is_material(derivative_refit):
         return "unexplained", "derivative_refit"
     return "none", ""
