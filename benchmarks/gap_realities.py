@@ -79,6 +79,7 @@ def _outcome(
         "expected": expected,
         "in_library": in_library,
         "verdict": report["verdict"],
+        "verdict_basis": report["verdict_basis"],
         "reported": report["effect"],
         "reported_set": sorted(named),
         "closure_test": report["closure"]["realised_test"],
