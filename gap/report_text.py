@@ -180,7 +180,15 @@ def render_report(report: dict[str, Any]) -> str:
         )
     lines += derivative_refit_lines(report.get("derivative_refit"))
     pointer = report["sparse_regression"]
-    lines.append("sparse regression of the residual (pointer):")
+    lines.append(
+        "sparse regression of the residual (pointer"
+        + (
+            "; its linear terms also take up the sensor noise and gust response of the measured states they "
+            "are regressed on, so read its nonlinear terms first):"
+            if report["data_kind"] == "flight"
+            else "):"
+        )
+    )
     for target, fit in pointer.items():
         terms = ", ".join(f"{name} {value:+.3g}" for name, value in fit["terms"].items())
         lines.append(f"  {target}: {terms or '-'} (explains {100 * fit['explained']:.0f} %)")
