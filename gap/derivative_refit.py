@@ -84,7 +84,9 @@ def refit_derivatives(
     def sse(candidate: LinearFlightModel, runs: Sequence[FlightRun]) -> np.ndarray:
         return np.array([np.sum(r**2) for r in weighted_residuals(candidate, runs)])
 
-    closure, interval = closure_with_interval(sse(baseline, test), sse(joint.model, test), seed)
+    closure, closure_interval = closure_with_interval(
+        sse(baseline, test), sse(joint.model, test), seed
+    )
     train_closure, _ = closure_with_interval(
         sse(baseline, training), sse(joint.model, training), seed
     )
@@ -93,7 +95,7 @@ def refit_derivatives(
         "moved": [name for name, item in derivatives.items() if item["moved"]],
         "closure_training": train_closure,
         "closure_test": closure,
-        "closure_interval": interval,
+        "closure_interval": closure_interval,
         "remainder_fraction_test": 1.0 - closure,
-        "supported_by_test_runs": bool(interval[0] > 0),
+        "supported_by_test_runs": bool(closure_interval[0] > 0),
     }

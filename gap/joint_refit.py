@@ -32,8 +32,9 @@ manoeuvres the 90 % intervals held each of the 12 derivatives' true change in 0.
 more of a derivative's information weighs more when it is left out, which the sandwich misses with
 few runs (the CR3 estimator of Cameron and Miller's "Practitioner's guide to cluster-robust
 inference", J. Human Resources 50, 2015): on 30 records of a lateral-directional model cut into 20
-segments (10 training), the intervals of its 12 unchanged derivatives held zero in 0.875 against
-the sandwich's 0.853 (tests/gap/test_lateral_model.py).
+segments (10 training; the records of tests/gap/test_lateral_model.py at data seeds 10-39, an offline
+survey, docs/gap-diagnosis.md step 7), the intervals of its 12 unchanged derivatives held zero in 0.875
+against the sandwich's 0.853.
 """
 
 from __future__ import annotations

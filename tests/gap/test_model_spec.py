@@ -55,6 +55,18 @@ def test_a_model_file_baseline_needs_no_configuration_and_reads_back(tmp_path):
     assert np.isnan(again.x_h_mm)
 
 
+def test_the_derivative_refit_is_on_for_a_model_file_unless_switched_off(tmp_path):
+    path = tmp_path / "b.toml"
+    path.write_text('[baseline]\nkind = "linear_model"\nmodel = "twin_otter_short_period"\n')
+    assert read_baseline_spec(path).derivative_refit is True
+    off = BaselineSpec("linear_model", model="twin_otter_short_period", derivative_refit=False)
+    written = write_baseline_spec(off, tmp_path / "off.toml")
+    assert "derivative_refit = false" in written.read_text()
+    assert read_baseline_spec(written).derivative_refit is False
+    # a simulator baseline has no model file's derivatives to re-fit
+    assert BaselineSpec("simulator", "S3", 98.0).derivative_refit is False
+
+
 def test_linear_model_baseline_uses_the_file_and_only_augmentations(tmp_path):
     spec = BaselineSpec("linear_model", "S3", 98.0, model="delfly_longitudinal")
     baseline = baseline_flight_model(spec)
