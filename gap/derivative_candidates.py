@@ -54,6 +54,11 @@ def model_parameter_for(candidate: str, parameter_names: Sequence[str]) -> str |
     return next((name for name in parameter_names if name.replace("_", "") in spellings), None)
 
 
+DERIVATIVE_LEVEL_CANDIDATES = (*MODEL_PARAMETERS, "iyy_shift", "heave_added_mass")
+"""Every derivative-level candidate's name: a finding about the model's own parameters, not a named
+unmodelled effect."""
+
+
 SIMULATOR_ENTRIES: dict[str, tuple[str, str, int, int, str]] = {
     "pitch_damping": ("M_q", "a", 0, 0, "N m s/rad"),
     "static_stability": ("M_w", "a", 0, 2, "N s"),

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from ornitail.gap.derivative_candidates import DERIVATIVE_LEVEL_CANDIDATES
+
 
 def _gap_line(label: str, gap: dict[str, Any]) -> str:
     channels = ", ".join(
@@ -69,17 +71,48 @@ def derivative_refit_lines(refit: dict[str, Any] | None) -> list[str]:
 
 
 def _near_miss_lines(report: dict[str, Any]) -> list[str]:
-    """When no effect is named although the best candidate beats the null's 95th percentile: what
-    stopped it (its lower bound under the lower-bound threshold, e.g. the materiality floor)."""
+    """When no effect is named although the best candidate does better than a typical random
+    direction (the null's median) and either beats the null's 95th percentile or closes at least the
+    materiality floor on validation runs: which part of the rule kept it out (random directions
+    reaching as much, or its lower bound under the lower-bound threshold)."""
     rule, top = report["detection_rule"], report["ranking"][0]
-    if report["verdict"] == "effect" or top["validation_closure"] <= rule["threshold"]:
+    closure, threshold = top["validation_closure"], rule["threshold"]
+    if (
+        report["verdict"] == "effect"
+        or closure <= rule["null_closures_median"]
+        or (closure <= threshold and closure < rule["materiality_floor"])
+    ):
         return []
     magnitude = {"value": top["magnitude"], "unit": top["unit"], "at_bound": top["at_bound"]}
+    bound, bound_threshold = top["simultaneous_lower_bound"], rule["lower_bound_threshold"]
+    if closure > threshold:
+        head = "not named, though it beats the null"
+        why = f"above the null's {threshold:.3f}, but its lower bound {bound:.3f} is under {bound_threshold:.3f}"
+    else:
+        head = "not named, though it closes more than a typical random direction"
+        why = f"but random directions of the model reach as much (the null's 95th percentile {threshold:.3f})"
+        if bound <= bound_threshold:
+            why += f", and its lower bound {bound:.3f} is under {bound_threshold:.3f}"
     return [
-        f"  not named, though it beats the null: {top['name']} ({magnitude_text(magnitude)}) closes "
-        f"{top['validation_closure']:.3f} on validation runs, above the null's {rule['threshold']:.3f}, but "
-        f"its lower bound {top['simultaneous_lower_bound']:.3f} is under {rule['lower_bound_threshold']:.3f}; "
-        f"on test runs it closes {report['closure']['realised_test']:.3f} (how far, below)"
+        f"  {head}: {top['name']} ({magnitude_text(magnitude)}) closes {closure:.3f} on validation runs, "
+        f"{why}; on test runs it closes {report['closure']['realised_test']:.3f} (how far, below)"
+    ]
+
+
+def _derivative_level_lines(report: dict[str, Any]) -> list[str]:
+    """When the named effect is a derivative-level candidate: that it says where the model is off,
+    which a missing physical term and the baseline's own linearisation error at the amplitude
+    flown would both explain, and which physical effects share its set."""
+    if report["verdict"] != "effect" or report["effect"] not in DERIVATIVE_LEVEL_CANDIDATES:
+        return []
+    physical = [
+        name for name in report["indistinguishable_set"] if name not in DERIVATIVE_LEVEL_CANDIDATES
+    ]
+    shared = f"; it shares its set with {', '.join(physical)}" if physical else ""
+    return [
+        f"  {report['effect']} is a change of the model's own parameters: it says where the model is off, "
+        "not which term is missing there (a physical term, or the baseline's own linearisation error at the "
+        f"amplitude flown; docs/gap-diagnosis.md, Detection limits){shared}"
     ]
 
 
@@ -129,12 +162,14 @@ def render_report(report: dict[str, Any]) -> str:
         )
     elif report["verdict"] == "unexplained":
         lines.append(
-            "effect: unexplained (no candidate closes the gap; see the sparse-regression pointer)"
+            "effect: unexplained (a systematic gap that no candidate explains by the detection rule; see the "
+            "sparse-regression pointer)"
         )
     else:
         lines.append(
             "effect: none (no candidate passes the detection rule, and the gap shows no systematic part)"
         )
+    lines += _derivative_level_lines(report)
     lines += _near_miss_lines(report)
     lines.append("where:")
     lines += [f"  {sentence}" for sentence in report["where"]["summary"]]

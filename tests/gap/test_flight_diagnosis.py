@@ -7,7 +7,7 @@ import pytest
 from ornitail.gap.flight_data import nested_splits
 from ornitail.gap.flight_diagnosis import FlightDiagnosis, diagnose_flight
 from ornitail.gap.model_spec import read_baseline_spec, write_baseline_spec
-from ornitail.gap.report_text import render_report
+from ornitail.gap.report_text import _derivative_level_lines, _near_miss_lines, render_report
 from ornitail.gap.withheld_effects import WithheldCase, simulate_withheld_log, true_magnitudes
 from ornitail.sim.free_flight import write_flight_log_csv
 
@@ -176,3 +176,85 @@ def test_a_second_effect_is_found_on_top_of_the_first(tmp_path):
     second = report["second_effect"]
     assert second["validation_closure_beyond_first"] > (second["detection_rule"]["threshold"])
     assert second["closure_beyond_first"] > 0.1  # on the test runs
+    # a derivative named first is said to locate the model's error, not to name an unmodelled effect
+    caution = f"{report['effect']} is a change of the model's own parameters"
+    assert (caution in render_report(report)) == (report["effect"] == "pitch_damping")
+
+
+@pytest.mark.parametrize(
+    ("effect", "members", "said"),
+    [
+        (
+            "heave_damping",
+            ["heave_damping"],
+            "the amplitude flown; docs/gap-diagnosis.md, Detection limits)",
+        ),
+        ("iyy_shift", ["iyy_shift", "added_mass"], "it shares its set with added_mass"),
+        ("input_delay", ["input_delay", "pitch_damping"], None),
+    ],
+)
+def test_a_derivative_level_verdict_says_it_locates_the_error(effect, members, said):
+    report = {"verdict": "effect", "effect": effect, "indistinguishable_set": members}
+    lines = _derivative_level_lines(report)
+    if said is None:
+        assert lines == []  # a measurement effect named first is an effect
+    else:
+        (line,) = lines
+        assert line.strip().startswith(f"{effect} is a change of the model's own parameters")
+        assert "not which term is missing there" in line and line.endswith(said)
+
+
+def _unnamed(closure, bound, threshold=0.281, median=0.137):
+    """A report with no effect named whose top candidate closes ``closure`` with lower bound ``bound``."""
+    return {
+        "verdict": "unexplained",
+        "detection_rule": {
+            "threshold": threshold,
+            "null_closures_median": median,
+            "lower_bound_threshold": max(median, 0.10),
+            "materiality_floor": 0.10,
+        },
+        "ranking": [
+            {
+                "name": "iyy_shift",
+                "magnitude": 0.42,
+                "unit": "fraction",
+                "at_bound": None,
+                "validation_closure": closure,
+                "simultaneous_lower_bound": bound,
+            }
+        ],
+        "closure": {"realised_test": 0.239},
+    }
+
+
+@pytest.mark.parametrize(
+    ("closure", "bound", "said"),
+    [
+        # under the null's 95th percentile, lower bound above its threshold: the null alone kept it out
+        (
+            0.275,
+            0.23,
+            "but random directions of the model reach as much (the null's 95th percentile 0.281);",
+        ),
+        # under the 95th percentile and its bound under the threshold: both said
+        (
+            0.2,
+            0.12,
+            "(the null's 95th percentile 0.281), and its lower bound 0.120 is under 0.137;",
+        ),
+        # above the 95th percentile, bound under: the line the lateral model's rudder delay gets
+        (0.3, 0.12, "above the null's 0.281, but its lower bound 0.120 is under 0.137;"),
+        # no better than a typical random direction, or immaterial and under the 95th percentile: no line
+        (0.13, 0.05, None),
+        (0.09, 0.05, None),
+    ],
+)
+def test_an_unnamed_top_candidate_is_said_with_what_kept_it_out(closure, bound, said):
+    lines = _near_miss_lines(_unnamed(closure, bound, median=0.137 if closure != 0.09 else 0.05))
+    if said is None:
+        assert lines == []
+    else:
+        (line,) = lines
+        assert f"iyy_shift (0.42 fraction) closes {closure:.3f} on validation runs" in line
+        assert said in line and line.endswith("on test runs it closes 0.239 (how far, below)")
