@@ -62,7 +62,7 @@ from ornitail.acquisition.rig import Rig
 from ornitail.acquisition.run_documents import DocumentDispatcher, PlanProgress
 from ornitail.acquisition.run_engine import OpenRun, run_plan
 from ornitail.acquisition.run_files import read_journal, run_is_live
-from ornitail.acquisition.set_point_recording import MAX_RETAKES, POLL_INTERVAL_S
+from ornitail.acquisition.set_point_recording import POLL_INTERVAL_S
 from ornitail.acquisition.sweep_plan import (
     SetPoint,
     SweepPlan,
@@ -388,7 +388,7 @@ class _SweepContext:
         if record.samples_missing_in_record:
             self.lossy_points[point.index] = (
                 f"set point {point.label} lost {record.samples_missing_in_record} samples "
-                f"inside its record after {MAX_RETAKES} retakes"
+                f"inside its record after {record.extra['retakes']} retakes"
             )
         else:
             self.lossy_points.pop(point.index, None)
@@ -572,7 +572,7 @@ def record_warnings(point: SetPoint, record: SetPointRecord) -> list[str]:
     if record.samples_missing_in_record:
         lines.append(
             f"warning: set point {point.label}: {record.samples_missing_in_record} of {rows} samples still "
-            f"lost inside the record after {MAX_RETAKES} retakes; the run ends incomplete and "
+            f"lost inside the record after {record.extra['retakes']} retakes; the run ends incomplete and "
             "resuming the sweep records the point again",
         )
     return lines

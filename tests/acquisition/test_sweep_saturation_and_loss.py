@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from ornitail.acquisition import catalog_sync
+from ornitail.acquisition import catalog_sync, set_point_recording
 from ornitail.acquisition.catalog import CATALOG_FILE_NAME, RunCatalog
 from ornitail.acquisition.live_balance import LiveBalance
 from ornitail.acquisition.recording_reader import load_recording
@@ -154,8 +154,11 @@ def test_a_gauge_held_at_the_rail_is_reported_from_the_sweep_to_process(
 
 @pytest.mark.parametrize("kind", ["measurement", "tare"])
 def test_a_point_lossy_through_its_retakes_ends_the_sweep_incomplete_and_resume_records_it(
-    simulated_rig, plan, tmp_path, cli, kind
+    simulated_rig, plan, tmp_path, cli, kind, monkeypatch
 ):
+    # fewer retakes than the default, so the messages must name the retakes taken, not the default's count
+    retakes = MAX_RETAKES - 1
+    monkeypatch.setattr(set_point_recording, "MAX_RETAKES", retakes)
     board = simulated_rig.simulators.daq_board
     target = next(p for p in plan.set_points if p.kind == kind and p.tail_attached)
     # What a resume must record again: the point, the tares that zero it in its run (this plan has no bracketing
@@ -189,16 +192,20 @@ def test_a_point_lossy_through_its_retakes_ends_the_sweep_incomplete_and_resume_
     warned = [document for document in set_points if document.warnings]
     assert [document.plan_point_index for document in warned] == [target.index]
     (line,) = warned[0].warnings
-    assert result.warnings == [line] and "still lost inside the record" in line
+    assert (
+        result.warnings == [line]
+        and f"still lost inside the record after {retakes} retakes" in line
+    )
     assert exit_code_of(result) == EXIT_INCOMPLETE == 4
     assert result.incomplete_points == [target.index], result.message
     assert result.completed_points == len(plan.set_points) - 1
     assert f"#{target.index} " in result.message and "resume the sweep" in result.message
+    assert f"inside its record after {retakes} retakes" in result.message
     tailed = load_recording(result.run_directories[0])
     assert tailed.status == "incomplete"
     assert f"#{target.index} " in tailed.failure_reason
     (kept,) = [r for r in tailed.set_points if r.plan_point_index == target.index]
-    assert kept.extra["retakes"] == MAX_RETAKES and kept.samples_missing_in_record >= 5
+    assert kept.extra["retakes"] == retakes and kept.samples_missing_in_record >= 5
     tailless = load_recording(result.run_directories[1])
     assert tailless.status == "completed", tailless.failure_reason
     runs = listed_runs(cli, data_root)
