@@ -229,29 +229,31 @@ def _unnamed(closure, bound, threshold=0.281, median=0.137):
 
 
 @pytest.mark.parametrize(
-    ("closure", "bound", "said"),
+    ("closure", "bound", "median", "said"),
     [
         # under the null's 95th percentile, lower bound above its threshold: the null alone kept it out
         (
             0.275,
             0.23,
+            0.137,
             "but random directions of the model reach as much (the null's 95th percentile 0.281);",
         ),
         # under the 95th percentile and its bound under the threshold: both said
         (
             0.2,
             0.12,
+            0.137,
             "(the null's 95th percentile 0.281), and its lower bound 0.120 is under 0.137;",
         ),
         # above the 95th percentile, bound under: the line the lateral model's rudder delay gets
-        (0.3, 0.12, "above the null's 0.281, but its lower bound 0.120 is under 0.137;"),
+        (0.3, 0.12, 0.137, "above the null's 0.281, but its lower bound 0.120 is under 0.137;"),
         # no better than a typical random direction, or immaterial and under the 95th percentile: no line
-        (0.13, 0.05, None),
-        (0.09, 0.05, None),
+        (0.13, 0.05, 0.137, None),
+        (0.09, 0.05, 0.05, None),
     ],
 )
-def test_an_unnamed_top_candidate_is_said_with_what_kept_it_out(closure, bound, said):
-    lines = _near_miss_lines(_unnamed(closure, bound, median=0.137 if closure != 0.09 else 0.05))
+def test_an_unnamed_top_candidate_is_said_with_what_kept_it_out(closure, bound, median, said):
+    lines = _near_miss_lines(_unnamed(closure, bound, median=median))
     if said is None:
         assert lines == []
     else:
