@@ -47,9 +47,10 @@ TIME_SCALES = {
     # Rows at 5 kHz (the plan's rate); beside the balances a 5 kHz auxiliary board, the CAN balance polled 250/s and
     # the Net F/T at 500 records/s (7000 / 14): the benchmark's LIGHT_RATES. Each rig runs as fast as a busy
     # two-core host keeps its stream whole: the ORNI-DAQ9 alone at 10x real time; the Net F/T at 2x (1000 datagrams
-    # per wall second; at 5x a slow host's stall of about 7 ms dropped 17 datagrams in a row, stop 34); the polled CAN balance at 1x (a stall of its poller longer than 3 polls, 12 ms of wall time
-    # here, loses rows). At 2x (6 ms) a slow host (a pure-Python loop 1.5-2x its usual time, stop 34) lost rows in
-    # every one of 13 takes of each point and failed the sweep, twice in a row on a quiet machine; 1x then passed.
+    # per wall second; at 5x a slow host's stall of about 7 ms dropped 17 datagrams in a row, stop 34); the polled
+    # CAN balance at 1x (a stall of its poller longer than 3 polls, 12 ms of wall time here, loses rows). At 2x
+    # (6 ms) a slow host (a pure-Python loop 1.5-2x its usual time, stop 34) lost rows in every one of 13 takes of
+    # each point and failed the sweep, twice in a row on a quiet machine; 1x then passed.
     "serial_daq": 10.0,
     "can_aux": 1.0,
     "netft_aux": 2.0,
