@@ -71,7 +71,7 @@ class NetFtBalance(NetFtDriver, TimedGaugeBalance):
     def _reset_timing(self) -> None:
         self._model = CounterClockModel(protocol.INTERNAL_SAMPLE_RATE_HZ)
         self._unwrapper = CounterUnwrapper()
-        self._last_counter: int | None = None
+        self._last_counter: tuple[int, int] | None = None  # (ft_sequence unwrapped, rdt_sequence)
         self._last_time_s = -np.inf
 
     # -- BalanceStream ----------------------------------------------------------------------
@@ -132,14 +132,14 @@ class NetFtBalance(NetFtDriver, TimedGaugeBalance):
         Raises
         ------
         InstrumentReplyError
-            The records are not ``7000 / rdt_rate_hz`` internal samples apart: the device streams at another
-            rate than the rig file says.
+            The records are not ``7000 / rdt_rate_hz`` internal samples apart per ``rdt_sequence`` step: the
+            device streams at another rate than the rig file says (lost records are not a wrong rate).
         """
         block = self.get_block(timeout_s=timeout_s)
         if block is None:
             return None
         counters = self._unwrapper.unwrap(block.ft_sequence)
-        self._check_record_spacing(counters)
+        self._check_record_spacing(counters, block.rdt_sequence)
         self._model.add(int(counters[-1]), block.host_time_s)
         fit = self._model.fit()
         assert fit is not None
@@ -152,20 +152,24 @@ class NetFtBalance(NetFtDriver, TimedGaugeBalance):
             times[later], self.gauge_volts(block.wrench[later]), (block.status != 0)[later]
         )
 
-    def _check_record_spacing(self, counters: np.ndarray) -> None:
-        chain = counters if self._last_counter is None else np.r_[self._last_counter, counters]
-        self._last_counter = int(counters[-1])
-        if len(chain) < 2:
-            return
-        spacing = int(
-            np.gcd.reduce(np.diff(chain))
-        )  # a lost record doubles a step, not the spacing
+    def _check_record_spacing(self, counters: np.ndarray, rdt_sequence: np.ndarray) -> None:
+        """Every record must advance ``ft_sequence`` by ``7000 / rdt_rate_hz`` internal samples per step of
+        ``rdt_sequence``: a lost record advances both, so a burst of lost datagrams is not a wrong rate."""
+        records = rdt_sequence.astype(np.int64)
+        if self._last_counter is not None:
+            counters = np.r_[self._last_counter[0], counters]
+            records = np.r_[self._last_counter[1], records]
+        self._last_counter = (int(counters[-1]), int(records[-1]))
+        record_steps = np.diff(records) % protocol.SEQUENCE_MODULUS
+        forward = (record_steps > 0) & (record_steps <= protocol.SEQUENCE_MODULUS // 2)
+        spacing = np.diff(counters)[forward] / record_steps[forward]
         expected = round(protocol.INTERNAL_SAMPLE_RATE_HZ / self.rdt_rate_hz)
-        if spacing != expected:
+        wrong = spacing[spacing != expected]
+        if wrong.size:
             raise InstrumentReplyError(
                 self.name,
-                f"records from {self.address} are {spacing} internal samples apart "
-                f"({protocol.INTERNAL_SAMPLE_RATE_HZ / max(spacing, 1):g} records/s), not {expected} "
+                f"records from {self.address} are {wrong[0]:g} internal samples apart "
+                f"({protocol.INTERNAL_SAMPLE_RATE_HZ / max(wrong[0], 1):g} records/s), not {expected} "
                 f"({self.rdt_rate_hz:g} records/s, [balance.netft].rdt_rate_hz): set the device's RDT output "
                 "rate or the rig file",
             )

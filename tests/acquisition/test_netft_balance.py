@@ -118,6 +118,27 @@ def test_records_at_another_rate_than_the_rig_file_says_are_refused_in_one_line(
     assert "[balance.netft].rdt_rate_hz" in message
 
 
+def test_a_burst_of_lost_records_is_counted_as_lost_not_refused_as_a_wrong_rate():
+    """Every other record from 40 to 200 lost: for 0.3 s each record arrives 28 internal samples after the one
+    before it, as a 250 records/s stream's would; the rdt_sequence steps of 2 show them lost, not the rate wrong."""
+    dropped = set(range(40, 201, 2))
+    with SimulatedNetFt(constant_load(LOAD), rate_hz=500.0, drop_rdt_sequences=dropped) as device:
+        balance = balance_for(device, 500.0)
+        try:
+            balance.open()
+            balance.start_stream(500.0)
+            blocks = blocks_until(
+                balance.read_timed_gauges, lambda b: sum(len(x.sample_time_s) for x in b) >= 300
+            )
+            balance.stop_stream()
+            counts = balance.link_counts()
+        finally:
+            balance.close()
+    steps_s = np.diff(np.concatenate([block.sample_time_s for block in blocks]))
+    assert np.median(steps_s) == pytest.approx(0.002, rel=0.1)  # the device's own 2 ms spacing
+    assert counts.lost_samples == len(dropped)
+
+
 def test_a_rate_other_than_the_devices_is_refused_before_streaming():
     balance = NetFtBalance(
         "127.0.0.1", calibration_matrix_si=MATRIX_SI, rdt_rate_hz=1000.0, name="test Net F/T"
