@@ -148,7 +148,7 @@ def test_aligned_stream_matches_the_simulated_boards_true_sample_times(tmp_path,
             rig.simulators.netft is not None
         ):  # the Net F/T's records are placed by a counter line too
             stride = round(7000 / rig.description.netft.rdt_rate_hz)  # internal samples per record
-            newest = balance.balance._last_counter - stride * np.arange(2000)  # 2 s of records
+            newest = balance.balance._last_counter[0] - stride * np.arange(2000)  # 2 s of records
             netft_error_s = balance.balance._model.fit().time_of(
                 newest
             ) - rig.simulators.netft.sample_time_s(newest)
