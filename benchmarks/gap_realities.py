@@ -21,8 +21,15 @@ measurement effect; and for named effects how often a fresh flight's closure
 run the derivative re-fit (docs/gap-diagnosis.md, Method step 7): how often its moves are supported
 by the test runs, and its median closure there.
 
+Each rate also gets its 95 % Wilson score interval (``rate_intervals_95``): with 4 effect-free
+flights a seed, one false alarm is 0.25 with an interval of 0.05-0.70.
+
 ``python benchmarks/gap_realities.py [--sim-cases 10] [--independent-cases 12] [--seed 2018]
 [--out result.json] [--validation first-fold]``
+
+``python benchmarks/gap_realities.py --combine a.json b.json ... [--out pooled.json]`` pools the cases
+of earlier results (each seed's part once: a seed run as two processes, one per part, writes its
+semi-real part twice) and scores them as one.
 """
 
 from __future__ import annotations
@@ -196,8 +203,25 @@ def semi_real_part(
     return results
 
 
+WILSON_Z = 1.959963984540054  # the standard normal's 97.5 % quantile: two-sided 95 %
+
+
 def _rate(flags: list[bool]) -> str:
     return f"{sum(flags)} of {len(flags)}" if flags else "-"
+
+
+def wilson_interval(successes: int, trials: int) -> list[float] | None:
+    """95 % Wilson score interval of a binomial rate (None without trials): unlike the normal
+    approximation it stays inside [0, 1] and keeps its coverage near 0 and 1 and at small n."""
+    if trials == 0:
+        return None
+    rate = successes / trials
+    spread = WILSON_Z**2 / trials
+    centre = (rate + spread / 2) / (1 + spread)
+    half = WILSON_Z * np.sqrt(rate * (1 - rate) / trials + spread / (4 * trials)) / (1 + spread)
+    low = 0.0 if successes == 0 else float(centre - half)  # exactly 0 and 1 there, not rounding's
+    high = 1.0 if successes == trials else float(centre + half)
+    return [low, high]
 
 
 def _missed(result: dict[str, object]) -> dict[str, object]:
@@ -227,13 +251,25 @@ def summarise(results: list[dict[str, object]]) -> dict[str, object]:
     refit_closures = [
         r["refit_closure_test"] for r in refits if r["refit_closure_test"] is not None
     ]
+    false_alarms = [r["verdict"] == "effect" for r in none_cases]
+    outside_right = [
+        r["verdict"] == "unexplained"
+        or (r["verdict"] == "effect" and r["reported"] in DERIVATIVE_LEVEL_CANDIDATES)
+        for r in outside
+    ]
+    rates = {
+        "false_alarms_on_no_effect": false_alarms,
+        "named_in_library": named,
+        "out_of_library_unexplained_or_nearest_derivative": outside_right,
+        "fresh_flight_closure_within_prediction_interval": predicted,
+    }
     return {
         "cases": len(results),
         "derivative_refit_supported_by_test_runs": _rate([r["refit_supported"] for r in refits]),
         "derivative_refit_closure_test_median": float(np.median(refit_closures))
         if refit_closures
         else None,
-        "false_alarms_on_no_effect": _rate([r["verdict"] == "effect" for r in none_cases]),
+        "false_alarms_on_no_effect": _rate(false_alarms),
         "false_alarms_derivative_level": _rate(
             [
                 r["verdict"] == "effect" and r["reported"] in DERIVATIVE_LEVEL_CANDIDATES
@@ -247,16 +283,41 @@ def summarise(results: list[dict[str, object]]) -> dict[str, object]:
         ],
         "magnitude_error_median": float(np.median(errors)) if errors else None,
         "magnitude_error_max": float(np.max(errors)) if errors else None,
-        "out_of_library_unexplained_or_nearest_derivative": _rate(
-            [
-                r["verdict"] == "unexplained"
-                or (r["verdict"] == "effect" and r["reported"] in DERIVATIVE_LEVEL_CANDIDATES)
-                for r in outside
-            ]
-        ),
+        "out_of_library_unexplained_or_nearest_derivative": _rate(outside_right),
         "out_of_library_named_as": [r["reported"] or r["verdict"] for r in outside],
         "fresh_flight_closure_within_reported_interval": _rate(fresh),
         "fresh_flight_closure_within_prediction_interval": _rate(predicted),
+        "rate_intervals_95": {
+            name: wilson_interval(sum(flags), len(flags)) for name, flags in rates.items()
+        },
+    }
+
+
+def combine(paths: list[Path]) -> dict[str, object]:
+    """Earlier results (``--out`` files) pooled: per part, each seed's cases once (the longest list
+    any file holds for that seed: a seed's parts run as separate processes each carry the same
+    semi-real cases), scored by :func:`summarise`."""
+    by_part: dict[str, dict[int, list]] = {}
+    for path in paths:
+        try:
+            result = json.loads(path.read_text())
+            seed, parts = int(result["seed"]), result["results"]
+        except (OSError, ValueError, KeyError, TypeError) as error:
+            raise SystemExit(f"{path}: not a gap_realities result file ({error})") from None
+        for part, cases in parts.items():
+            kept = by_part.setdefault(part, {})
+            if len(cases) > len(kept.get(seed, [])):
+                kept[seed] = cases
+    pooled = {
+        part: [case for cases in seeds.values() for case in cases]
+        for part, seeds in by_part.items()
+    }
+    return {
+        "seeds": {
+            part: sorted(s for s, cases in seeds.items() if cases)
+            for part, seeds in by_part.items()
+        },
+        "scores": {part: summarise(cases) for part, cases in pooled.items()},
     }
 
 
@@ -272,7 +333,16 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
         default="all-folds",
         help="the baseline files' [baseline].validation (first-fold: the first fold's validation runs alone)",
     )
+    parser.add_argument(
+        "--combine", type=Path, nargs="+", metavar="RESULT", help="pool earlier --out files"
+    )
     arguments = parser.parse_args(argv)
+    if arguments.combine:
+        pooled = combine(arguments.combine)
+        if arguments.out:
+            arguments.out.write_text(json.dumps(to_jsonable(pooled), indent=1))
+        print(json.dumps(to_jsonable(pooled), indent=1))
+        return pooled
     started = time.monotonic()
 
     def tick(what: str) -> None:

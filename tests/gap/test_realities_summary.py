@@ -1,7 +1,10 @@
 """The three-realities benchmark's scoring (benchmarks/gap_realities.py ``summarise``) on hand-made case
 results: every count is exact, so the bookkeeping of false alarms and misses is checked without a flight."""
 
-from gap_realities import summarise
+import json
+
+import pytest
+from gap_realities import combine, summarise, wilson_interval
 
 
 def case(expected, verdict, reported, in_library=True, closure_test=0.2, **more):
@@ -64,3 +67,51 @@ def test_the_simulator_parts_own_named_flag_decides_a_miss():
     scores = summarise(results)
     assert scores["named_in_library"] == "1 of 2"
     assert [miss["expected"] for miss in scores["in_library_missed"]] == ["added_mass"]
+
+
+def test_wilson_intervals_match_the_closed_form_and_stay_inside_zero_and_one():
+    # 1 of 4: centre (0.25 + z^2/8) / (1 + z^2/4), half-width z sqrt(3/64 + z^2/64) / (1 + z^2/4), z = 1.96
+    assert wilson_interval(1, 4) == pytest.approx([0.04559, 0.69936], abs=1e-5)
+    assert wilson_interval(0, 24)[0] == 0.0 and wilson_interval(24, 24)[1] == 1.0
+    assert wilson_interval(0, 0) is None
+    scores = summarise([case(None, "effect", "heave_damping")] + [case(None, "none", None)] * 3)
+    assert scores["rate_intervals_95"]["false_alarms_on_no_effect"] == wilson_interval(1, 4)
+    assert scores["rate_intervals_95"]["out_of_library_unexplained_or_nearest_derivative"] is None
+
+
+def _result_file(path, seed, parts):
+    path.write_text(json.dumps({"seed": seed, "results": parts}))
+    return path
+
+
+def test_combine_pools_every_seed_once_per_part(tmp_path):
+    semi = [case("input_delay", "effect", "input_delay")]
+    # one seed run as two processes (one per part), each carrying the same semi-real cases, and a second seed
+    files = [
+        _result_file(
+            tmp_path / "sim.json", 1, {"semi_real": semi, "sim": [case(None, "none", None)] * 2}
+        ),
+        _result_file(
+            tmp_path / "ind.json",
+            1,
+            {"semi_real": semi, "sim": [], "independent": [case(None, "effect", "heave_damping")]},
+        ),
+        _result_file(
+            tmp_path / "two.json",
+            2,
+            {"semi_real": semi, "sim": [case(None, "effect", "input_delay")]},
+        ),
+    ]
+    pooled = combine(files)
+    assert pooled["seeds"] == {"semi_real": [1, 2], "sim": [1, 2], "independent": [1]}
+    assert pooled["scores"]["semi_real"]["named_in_library"] == "2 of 2"
+    assert pooled["scores"]["sim"]["false_alarms_on_no_effect"] == "1 of 3"
+    assert pooled["scores"]["independent"]["false_alarms_derivative_level"] == "1 of 1"
+
+
+def test_a_file_that_is_not_a_result_is_named_in_one_line(tmp_path):
+    stray = tmp_path / "notes.json"
+    stray.write_text(json.dumps({"seed": 1}))
+    with pytest.raises(SystemExit, match=r"notes.json: not a gap_realities result file") as raised:
+        combine([stray])
+    assert "\n" not in str(raised.value)
