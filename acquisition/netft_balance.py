@@ -138,8 +138,12 @@ class NetFtBalance(NetFtDriver, TimedGaugeBalance):
         block = self.get_block(timeout_s=timeout_s)
         if block is None:
             return None
-        counters = self._unwrapper.unwrap(block.ft_sequence)
-        self._check_record_spacing(counters, block.rdt_sequence)
+        in_order = self._in_order(block.rdt_sequence)
+        if not in_order.any():
+            return None
+        rdt_sequence, wrench = block.rdt_sequence[in_order], block.wrench[in_order]
+        counters = self._unwrapper.unwrap(block.ft_sequence[in_order])
+        self._check_record_spacing(counters, rdt_sequence)
         self._model.add(int(counters[-1]), block.host_time_s)
         fit = self._model.fit()
         assert fit is not None
@@ -148,9 +152,26 @@ class NetFtBalance(NetFtDriver, TimedGaugeBalance):
         if not later.any():
             return None
         self._last_time_s = float(times[later][-1])
-        return TimedGauges(
-            times[later], self.gauge_volts(block.wrench[later]), (block.status != 0)[later]
-        )
+        flagged = block.status[in_order] != 0
+        return TimedGauges(times[later], self.gauge_volts(wrench[later]), flagged[later])
+
+    def _in_order(self, rdt_sequence: np.ndarray) -> np.ndarray:
+        """(n,) bool: the records that step ``rdt_sequence`` forward from the newest one kept. A datagram that
+        arrives after a later one (reordered by the network) or twice is left out of the timed stream, as a record
+        the counter line places before one already delivered is: its ``ft_sequence`` step backwards would read as
+        the counter wrapping round, 2**32 samples (seven days) on."""
+        keep = np.zeros(len(rdt_sequence), dtype=bool)
+        newest = None if self._last_counter is None else self._last_counter[1]
+        for index, sequence in enumerate(rdt_sequence.tolist()):
+            if (
+                newest is None
+                or 0
+                < (sequence - newest) % protocol.SEQUENCE_MODULUS
+                <= protocol.SEQUENCE_MODULUS // 2
+            ):
+                keep[index] = True
+                newest = sequence
+        return keep
 
     def _check_record_spacing(self, counters: np.ndarray, rdt_sequence: np.ndarray) -> None:
         """Every record must advance ``ft_sequence`` by ``7000 / rdt_rate_hz`` internal samples per step of

@@ -12,7 +12,8 @@ times the device took the records' samples, on ``clock`` (by default seconds sin
 software bias. On a simulated rig ``clock`` is the rig's simulated clock, the loads are the shared tunnel signals'
 and the device's own crystal runs ``rate_error_ppm`` off nominal (its ``ft_sequence`` is not the host's time, as on
 a real device). Fault injection: ``drop_rdt_sequences`` (records of a continuous stream numbered so are counted but
-not sent), :meth:`set_status`.
+not sent), ``late_rdt_sequences`` (records numbered so are sent after the record that follows them, as a network
+that reorders datagrams delivers them), :meth:`set_status`.
 """
 
 from __future__ import annotations
@@ -68,6 +69,8 @@ class SimulatedNetFt(SimulatedDevice):
     drop_rdt_sequences : iterable of int
         ``rdt_sequence`` numbers never sent in a stream until stopped (sample count 0), counted in
         :attr:`records_dropped`; a request for a given number of records is always answered whole.
+    late_rdt_sequences : iterable of int
+        ``rdt_sequence`` numbers sent just after the next record of the stream instead of before it.
     clock : callable returning s, or None
         The time records are paced by and loads taken at (a rig's simulated clock); None: the monotonic clock,
         counted from power-up (construction).
@@ -84,6 +87,7 @@ class SimulatedNetFt(SimulatedDevice):
         rdt_port: int = 0,
         http_port: int = 0,
         drop_rdt_sequences: Iterable[int] = (),
+        late_rdt_sequences: Iterable[int] = (),
         clock: Callable[[], float] | None = None,
         rate_error_ppm: float = 0.0,
     ) -> None:
@@ -95,6 +99,8 @@ class SimulatedNetFt(SimulatedDevice):
         self.rate_hz = float(rate_hz)
         self.counts_per_unit = counts_per_unit or protocol.CountsPerUnit(1_000_000, 1_000_000)
         self.drop_rdt_sequences = frozenset(int(n) for n in drop_rdt_sequences)
+        self.late_rdt_sequences = frozenset(int(n) for n in late_rdt_sequences)
+        self._held_datagram: bytes | None = None  # a late record, sent after the next one
         self.commands_received: list[int] = []
         self.records_sent = 0
         self.records_dropped = 0
@@ -190,6 +196,7 @@ class SimulatedNetFt(SimulatedDevice):
                 self._stream_first_sample = int(np.ceil(elapsed_s * self.true_internal_rate_hz))
                 self._stream_limit = sample_count
                 self._stream_position = 0
+                self._held_datagram = None  # a late record of an earlier stream is never sent
                 self.streaming = True
             elif command == protocol.COMMAND_SET_SOFTWARE_BIAS:
                 loads = self.load_function(np.array([self._clock()]))
@@ -233,8 +240,16 @@ class SimulatedNetFt(SimulatedDevice):
                 self.records_dropped += 1
                 continue
             start = index * protocol.RECORD_LENGTH
-            self._udp.sendto(payload[start : start + protocol.RECORD_LENGTH], client)
+            datagram = bytes(payload[start : start + protocol.RECORD_LENGTH])
+            if sequence in self.late_rdt_sequences and self._held_datagram is None:
+                self._held_datagram = datagram
+                continue
+            self._udp.sendto(datagram, client)
             self.records_sent += 1
+            if self._held_datagram is not None:
+                self._udp.sendto(self._held_datagram, client)
+                self._held_datagram = None
+                self.records_sent += 1
 
     def _http_handler(self) -> type[BaseHTTPRequestHandler]:
         simulator = self
