@@ -118,23 +118,29 @@ def test_records_at_another_rate_than_the_rig_file_says_are_refused_in_one_line(
     assert "[balance.netft].rdt_rate_hz" in message
 
 
-def test_a_burst_of_lost_records_is_counted_as_lost_not_refused_as_a_wrong_rate():
-    """Every other record from 40 to 200 lost: for 0.3 s each record arrives 28 internal samples after the one
-    before it, as a 250 records/s stream's would; the rdt_sequence steps of 2 show them lost, not the rate wrong."""
-    dropped = set(range(40, 201, 2))
-    with SimulatedNetFt(constant_load(LOAD), rate_hz=500.0, drop_rdt_sequences=dropped) as device:
+def timed_sample_steps(samples: int, **faults) -> tuple[np.ndarray, object]:
+    """The steps (s) between the first ``samples`` sample times of a 500 records/s stream from a device with
+    ``faults``, and the link counts."""
+    with SimulatedNetFt(constant_load(LOAD), rate_hz=500.0, **faults) as device:
         balance = balance_for(device, 500.0)
         try:
             balance.open()
             balance.start_stream(500.0)
             blocks = blocks_until(
-                balance.read_timed_gauges, lambda b: sum(len(x.sample_time_s) for x in b) >= 300
+                balance.read_timed_gauges, lambda b: sum(len(x.sample_time_s) for x in b) >= samples
             )
             balance.stop_stream()
             counts = balance.link_counts()
         finally:
             balance.close()
-    steps_s = np.diff(np.concatenate([block.sample_time_s for block in blocks]))
+    return np.diff(np.concatenate([block.sample_time_s for block in blocks])), counts
+
+
+def test_a_burst_of_lost_records_is_counted_as_lost_not_refused_as_a_wrong_rate():
+    """Every other record from 40 to 200 lost: for 0.3 s each record arrives 28 internal samples after the one
+    before it, as a 250 records/s stream's would; the rdt_sequence steps of 2 show them lost, not the rate wrong."""
+    dropped = set(range(40, 201, 2))
+    steps_s, counts = timed_sample_steps(300, drop_rdt_sequences=dropped)
     assert np.median(steps_s) == pytest.approx(0.002, rel=0.1)  # the device's own 2 ms spacing
     assert counts.lost_samples == len(dropped)
 
@@ -145,19 +151,8 @@ def test_a_datagram_overtaken_by_the_next_is_left_out_of_the_timed_stream():
     the records around it by 2-8 ms (steps of 0.05 ms and 10.3 ms between records 2 ms apart). The sample times
     step by the device's 2 ms, or 4 ms across a left-out record; 1 ms of slack is for the counter line's own
     refinement as lower arrival times come in (about 0.1-0.3 ms here after the first 100 records)."""
-    late = {120, 180, 240}
-    with SimulatedNetFt(constant_load(LOAD), rate_hz=500.0, late_rdt_sequences=late) as device:
-        balance = balance_for(device, 500.0)
-        try:
-            balance.open()
-            balance.start_stream(500.0)
-            blocks = blocks_until(
-                balance.read_timed_gauges, lambda b: sum(len(x.sample_time_s) for x in b) >= 350
-            )
-            balance.stop_stream()
-        finally:
-            balance.close()
-    steps_s = np.diff(np.concatenate([block.sample_time_s for block in blocks]))[100:]
+    steps_s, _ = timed_sample_steps(350, late_rdt_sequences={120, 180, 240})
+    steps_s = steps_s[100:]
     off_period_s = np.minimum(np.abs(steps_s - 0.002), np.abs(steps_s - 0.004))
     assert np.all(off_period_s < 0.001), np.round(steps_s[off_period_s >= 0.001] * 1e3, 3)
 
