@@ -157,9 +157,10 @@ class NetFtBalance(NetFtDriver, TimedGaugeBalance):
 
     def _in_order(self, rdt_sequence: np.ndarray) -> np.ndarray:
         """(n,) bool: the records that step ``rdt_sequence`` forward from the newest one kept. A datagram that
-        arrives after a later one (reordered by the network) or twice is left out of the timed stream, as a record
-        the counter line places before one already delivered is: its ``ft_sequence`` step backwards would read as
-        the counter wrapping round, 2**32 samples (seven days) on."""
+        arrives after a later one of an earlier block (reordered by the network; within a block the driver puts
+        them back in order) or twice is left out of the timed stream, as a record the counter line places before
+        one already delivered is: its ``ft_sequence`` step back would read as the counter wrapping round, 2**32
+        samples (seven days) on."""
         keep = np.zeros(len(rdt_sequence), dtype=bool)
         newest = None if self._last_counter is None else self._last_counter[1]
         for index, sequence in enumerate(rdt_sequence.tolist()):

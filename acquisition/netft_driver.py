@@ -387,7 +387,7 @@ class NetFtDriver:
     def _deliver(self, data: bytearray, previous_sequence: int, host_time_s: float) -> int:
         """Decode, count and queue one block; return its last ``rdt_sequence``."""
         assert self.counts_per_unit is not None
-        records = protocol.decode_records(bytes(data))
+        records = protocol.in_sequence_order(protocol.decode_records(bytes(data)))
         self.lost_records += protocol.lost_records(records.rdt_sequence, previous_sequence)
         self.records_received += len(records.rdt_sequence)
         self.status_flagged_records += int(np.count_nonzero(records.status))

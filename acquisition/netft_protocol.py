@@ -148,6 +148,22 @@ def lost_records(rdt_sequence: np.ndarray, previous: int) -> int:
     return int(np.sum(steps[forward] - 1))
 
 
+def in_sequence_order(records: RdtRecords) -> RdtRecords:
+    """``records`` sorted by ``rdt_sequence`` (wrapping at 2**32, counted from the first record): datagrams a
+    network delivered out of order within one block are put back in the order the device sent them."""
+    offsets = (
+        records.rdt_sequence.astype(np.int64) - int(records.rdt_sequence[0])
+    ) % SEQUENCE_MODULUS
+    signed = np.where(offsets >= SEQUENCE_MODULUS // 2, offsets - SEQUENCE_MODULUS, offsets)
+    order = np.argsort(signed, kind="stable")
+    return RdtRecords(
+        rdt_sequence=records.rdt_sequence[order],
+        ft_sequence=records.ft_sequence[order],
+        status=records.status[order],
+        counts=records.counts[order],
+    )
+
+
 def normalised_unit(name: str) -> str:
     """A unit name without case, hyphens, dots or spaces: ``"N-m"`` and ``"Nm"`` -> ``"nm"``."""
     return "".join(character for character in name.lower() if character not in "-. \u00b7")

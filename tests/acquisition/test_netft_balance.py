@@ -146,8 +146,9 @@ def test_a_burst_of_lost_records_is_counted_as_lost_not_refused_as_a_wrong_rate(
 
 
 def test_a_datagram_overtaken_by_the_next_is_left_out_of_the_timed_stream():
-    """Records 120, 180 and 240 arrive after the record that follows them. Each is left out of the timed stream:
-    its ft_sequence step back would read as the counter wrapping round, and the line re-placed under it misplaced
+    """Records 120, 180 and 240 arrive after the record that follows them. The driver puts a pair that falls in one
+    block back in order; a late record whose successor came in an earlier block is left out of the timed stream.
+    Before, its ft_sequence step back read as the counter wrapping round, and the line re-placed under it misplaced
     the records around it by 2-8 ms (steps of 0.05 ms and 10.3 ms between records 2 ms apart). The sample times
     step by the device's 2 ms, or 4 ms across a left-out record; 1 ms of slack is for the counter line's own
     refinement as lower arrival times come in (about 0.1-0.3 ms here after the first 100 records)."""

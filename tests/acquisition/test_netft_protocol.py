@@ -109,6 +109,35 @@ def test_lost_records_from_sequence_gaps(previous, sequence, lost):
     assert protocol.lost_records(np.array(sequence, dtype=np.uint32), previous) == lost
 
 
+@pytest.mark.parametrize(
+    ("arrived", "arrival_order"),
+    [
+        ([59, 61, 60, 62], [0, 2, 1, 3]),  # 60 overtaken by 61 on the way
+        ([2**32 - 1, 1, 0], [0, 2, 1]),  # across the roll-over: 0 follows 4294967295
+        ([5, 5, 6], [0, 1, 2]),  # a repeat stays (lost_records counts it as nothing lost)
+    ],
+)
+def test_records_reordered_within_a_block_are_put_back_in_the_devices_order(arrived, arrival_order):
+    count = len(arrived)
+    sequence = np.array(arrived, dtype=np.uint32)
+    records = protocol.RdtRecords(
+        rdt_sequence=sequence,
+        ft_sequence=sequence * np.uint32(7),
+        status=np.arange(count, dtype=np.uint32),
+        counts=np.tile(
+            np.arange(count, dtype=np.int32)[:, None], (1, 6)
+        ),  # each record tagged by arrival
+    )
+    ordered = protocol.in_sequence_order(records)
+    assert ordered.rdt_sequence.tolist() == sequence[arrival_order].tolist()
+    # every field moves with its record
+    assert ordered.ft_sequence.tolist() == (sequence[arrival_order] * np.uint32(7)).tolist()
+    assert ordered.status.tolist() == arrival_order
+    assert ordered.counts[:, 5].tolist() == arrival_order
+    previous = (int(ordered.rdt_sequence[0]) - 1) % 2**32
+    assert protocol.lost_records(ordered.rdt_sequence, previous) == 0
+
+
 # Trimmed from the element names of the manual's section 9.1 (netftapi2.xml); root <netft> as devices serve it.
 DEVICE_XML = """<?xml version="1.0"?><netft>
 <runstat>0x00000000</runstat><runrate>7000</runrate>
