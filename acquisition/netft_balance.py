@@ -164,12 +164,7 @@ class NetFtBalance(NetFtDriver, TimedGaugeBalance):
         keep = np.zeros(len(rdt_sequence), dtype=bool)
         newest = None if self._last_counter is None else self._last_counter[1]
         for index, sequence in enumerate(rdt_sequence.tolist()):
-            if (
-                newest is None
-                or 0
-                < (sequence - newest) % protocol.SEQUENCE_MODULUS
-                <= protocol.SEQUENCE_MODULUS // 2
-            ):
+            if newest is None or protocol.sequence_steps(sequence, newest) > 0:
                 keep[index] = True
                 newest = sequence
         return keep
@@ -182,8 +177,8 @@ class NetFtBalance(NetFtDriver, TimedGaugeBalance):
             counters = np.r_[self._last_counter[0], counters]
             records = np.r_[self._last_counter[1], records]
         self._last_counter = (int(counters[-1]), int(records[-1]))
-        record_steps = np.diff(records) % protocol.SEQUENCE_MODULUS
-        forward = (record_steps > 0) & (record_steps <= protocol.SEQUENCE_MODULUS // 2)
+        record_steps = protocol.sequence_steps(records[1:], records[:-1])
+        forward = record_steps > 0
         spacing = np.diff(counters)[forward] / record_steps[forward]
         expected = round(protocol.INTERNAL_SAMPLE_RATE_HZ / self.rdt_rate_hz)
         wrong = spacing[spacing != expected]

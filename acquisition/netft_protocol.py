@@ -135,6 +135,15 @@ def decode_records(data: bytes | bytearray | memoryview) -> RdtRecords:
     )
 
 
+def sequence_steps(later: np.ndarray | int, earlier: np.ndarray | int) -> np.ndarray:
+    """How many records ``later`` is after ``earlier`` (``rdt_sequence`` numbers, wrapping at 2**32), as int64 in
+    (-2**31, 2**31]: negative for a number the device sent before."""
+    offsets = (
+        np.asarray(later, dtype=np.int64) - np.asarray(earlier, dtype=np.int64)
+    ) % SEQUENCE_MODULUS
+    return np.where(offsets > SEQUENCE_MODULUS // 2, offsets - SEQUENCE_MODULUS, offsets)
+
+
 def lost_records(rdt_sequence: np.ndarray, previous: int) -> int:
     """Records missing between ``previous`` and the end of ``rdt_sequence`` (uint32, wrapping at 2**32).
 
@@ -142,20 +151,15 @@ def lost_records(rdt_sequence: np.ndarray, previous: int) -> int:
     device numbers a request's records from 1). A step backwards or a repeat (a reordered or duplicated
     datagram) loses nothing.
     """
-    chain = np.concatenate([np.array([previous], dtype=np.uint32), rdt_sequence.astype(np.uint32)])
-    steps = np.diff(chain).astype(np.int64)  # uint32 arithmetic wraps like the counter itself
-    forward = (steps > 1) & (steps <= SEQUENCE_MODULUS // 2)
-    return int(np.sum(steps[forward] - 1))
+    chain = np.concatenate([[previous], rdt_sequence.astype(np.int64)])
+    steps = sequence_steps(chain[1:], chain[:-1])
+    return int(np.sum(steps[steps > 1] - 1))
 
 
 def in_sequence_order(records: RdtRecords) -> RdtRecords:
     """``records`` sorted by ``rdt_sequence`` (wrapping at 2**32, counted from the first record): datagrams a
     network delivered out of order within one block are put back in the order the device sent them."""
-    offsets = (
-        records.rdt_sequence.astype(np.int64) - int(records.rdt_sequence[0])
-    ) % SEQUENCE_MODULUS
-    signed = np.where(offsets >= SEQUENCE_MODULUS // 2, offsets - SEQUENCE_MODULUS, offsets)
-    order = np.argsort(signed, kind="stable")
+    order = np.argsort(sequence_steps(records.rdt_sequence, records.rdt_sequence[0]), kind="stable")
     return RdtRecords(
         rdt_sequence=records.rdt_sequence[order],
         ft_sequence=records.ft_sequence[order],

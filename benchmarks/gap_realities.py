@@ -46,6 +46,7 @@ from pathlib import Path
 import independent_reality
 import numpy as np
 import semi_real
+from scipy import stats
 
 from ornitail.core.output import to_jsonable
 from ornitail.gap.benchmark import draw_case as draw_sim_case
@@ -203,7 +204,7 @@ def semi_real_part(
     return results
 
 
-WILSON_Z = 1.959963984540054  # the standard normal's 97.5 % quantile: two-sided 95 %
+WILSON_Z = float(stats.norm.isf(0.025))  # two-sided 95 %
 
 
 def _rate(flags: list[bool]) -> str:

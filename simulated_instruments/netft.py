@@ -240,9 +240,9 @@ class SimulatedNetFt(SimulatedDevice):
                 self.records_dropped += 1
                 continue
             start = index * protocol.RECORD_LENGTH
-            datagram = bytes(payload[start : start + protocol.RECORD_LENGTH])
+            datagram = payload[start : start + protocol.RECORD_LENGTH]
             if sequence in self.late_rdt_sequences and self._held_datagram is None:
-                self._held_datagram = datagram
+                self._held_datagram = bytes(datagram)  # kept past this call's payload
                 continue
             self._udp.sendto(datagram, client)
             self.records_sent += 1
