@@ -27,6 +27,9 @@ sample at or before it (its edges keep the auxiliary board's resolution). A row 
 recording shows the loss as a counter gap.
 
 Each set point's journal entry gets the alignment of the auxiliary clock (:meth:`AlignedBalance.alignment_values`).
+While a set point's record is taken both lines are held (:meth:`AlignedBalance.hold_alignment`): a line refitted
+inside the record moved one device's samples against the other's by 0.2-7 ms at a time on a loaded host, which cut or
+repeated that much of a flap and moved the cycle means by several of their sigmas.
 """
 
 from __future__ import annotations
@@ -226,6 +229,17 @@ class AlignedBalance(BalanceStream):
             "balance_sample_rate_hz": self.balance_rate_hz,
             "aligned_rows_lost": self._rows_lost,
         }
+
+    def hold_alignment(self) -> None:
+        """Hold both counter lines (the auxiliary board's and the balance's) as they are now: rows emitted until
+        :meth:`release_alignment` place every device's samples with one line each."""
+        self._model.hold()
+        self.balance.hold_alignment()
+
+    def release_alignment(self) -> None:
+        """Let both lines follow their arrivals again."""
+        self._model.release()
+        self.balance.release_alignment()
 
     def recording_description(self) -> dict[str, Any]:
         """The auxiliary board and the alignment method, for ``run.json``'s ``rig``."""

@@ -1,16 +1,20 @@
 """A device's sample counter mapped to host time: a straight line under the arrival times (the lower envelope).
 
 A device with its own sample clock (the ORNI-DAQ9 board beside another balance, the Net F/T's ``ft_sequence``) stamps
-nothing; the host knows
-only when each block arrived. Arrival = sampling time + transport latency, and the latency is never negative, so
-the sampling times lie on a line (the device's crystal: an offset and a rate a few tens of ppm off nominal) *at or
-below* every arrival. :class:`CounterClockModel` fits that line: the slope through the per-bin minima of the
-arrival times (bins of ``BIN_S`` of samples, where the fastest deliveries sit; the median of the slopes between
-every two bins, so that bins whose deliveries all stalled do not tilt it), the offset so that the line
-touches the lowest arrival of the newest ``OFFSET_WINDOW_S``. What remains is the transport's fastest delivery
-(its floor), which timestamps cannot see; the spread of the lowest arrivals above the line
-(:attr:`ClockFit.envelope_s`) says how sharply the line is known. Times are in the host clock's seconds (rig time
-on a simulated rig); counters are unwrapped (int64, :class:`CounterUnwrapper`).
+nothing; the host knows only when each block arrived. Arrival = sampling time + transport latency, and the latency is
+never negative, so the sampling times lie on a line (the device's crystal: an offset and a rate a few tens of ppm off
+nominal) *at or below* every arrival. :class:`CounterClockModel` fits that line: the slope through the per-bin minima
+of the arrival times (bins of ``BIN_S`` of samples, where the fastest deliveries sit; the median of the slopes
+between every two bins, so that bins whose deliveries all stalled do not tilt it), the offset so that the line
+touches the lowest arrival of the newest ``OFFSET_WINDOW_S``. What remains is the transport's fastest delivery (its
+floor), which timestamps cannot see; the spread of the lowest arrivals above the line (:attr:`ClockFit.envelope_s`)
+says how sharply the line is known. Times are in the host clock's seconds (rig time on a simulated rig); counters are
+unwrapped (int64, :class:`CounterUnwrapper`).
+
+The line is refitted as arrivals come, so it moves (a faster delivery, a new bin of the slope). While a set point's
+record is taken it is held (:meth:`CounterClockModel.hold`): a move of the line inside the record shifts the samples
+placed after it against those placed before, which cuts out or repeats that much of a flap and biases the cycle
+means.
 """
 
 from __future__ import annotations
@@ -30,9 +34,13 @@ span is less exact than the crystal (50-100 ppm)."""
 OFFSET_WINDOW_S = 5.0
 """The line is laid under the arrivals of the newest this many seconds (rows are taken near the newest samples),
 so an error of the rate moves it by at most rate error x this span (100 ppm: 0.5 ms)."""
-MAX_RATE_ERROR_PPM = 1000.0
-"""A fitted rate further off nominal than this is not a crystal's (stalled deliveries fooled the fit): the nominal
-rate is used instead."""
+CRYSTAL_TOLERANCE_PPM = 200.0
+"""How far off nominal a device's crystal can run, ppm: a common part's tolerance and temperature drift are each
+within about 50 ppm; twice their sum. A fitted rate beyond it is the host's, not the crystal's (its deliveries lagging
+more and more for seconds, as a starved reader does), and is clipped to it: resetting it to the nominal rate instead
+made the line jump by the slope's change over the offset window whenever the fit crossed the limit (6.7 ms back and
+forth every few tenths of a second at a 1000 ppm limit, on a loaded host), and a jump of the line inside a flap cuts
+or repeats that much of the flap's loads."""
 COUNTER_MODULUS = 1 << 32
 """The devices' counters are 32-bit and wrap to 0."""
 ENVELOPE_QUANTILE = 0.05
@@ -85,6 +93,7 @@ class CounterClockModel:
         self._counters = np.empty(0, dtype=np.int64)
         self._arrivals = np.empty(0, dtype=float)
         self._fit: ClockFit | None = None
+        self._held: ClockFit | None = None
         self._lock = threading.Lock()  # the stream's reader adds while a sweep asks for the fit
 
     def add(self, last_counter: int, arrival_s: float) -> None:
@@ -104,11 +113,27 @@ class CounterClockModel:
         return len(self._counters)
 
     def fit(self) -> ClockFit | None:
-        """The line under the arrivals in the window (None before the first arrival)."""
+        """The line under the arrivals in the window, or the line held by :meth:`hold` (None before the first
+        arrival)."""
         with self._lock:
+            if self._held is not None:
+                return self._held
             if self._fit is None and len(self._counters):
                 self._fit = self._fitted()
             return self._fit
+
+    def hold(self) -> None:
+        """From now on :meth:`fit` returns the line as it is now (arrivals are still taken in), until
+        :meth:`release`; nothing is held before the first arrival."""
+        with self._lock:
+            if self._fit is None and len(self._counters):
+                self._fit = self._fitted()
+            self._held = self._fit
+
+    def release(self) -> None:
+        """:meth:`fit` follows the arrivals again."""
+        with self._lock:
+            self._held = None
 
     def _fitted(self) -> ClockFit:
         reference = int(self._counters[0])
@@ -126,9 +151,8 @@ class CounterClockModel:
                     for start, part in zip(starts, np.split(residual, edges), strict=True)
                 ]
             )
-            slope = _median_slope(x[lowest], residual[lowest])
-            if abs(slope / self.nominal_period_s) > MAX_RATE_ERROR_PPM * 1e-6:
-                slope = 0.0
+            limit = CRYSTAL_TOLERANCE_PPM * 1e-6 * self.nominal_period_s
+            slope = float(np.clip(_median_slope(x[lowest], residual[lowest]), -limit, limit))
         above = residual - slope * x
         recent = x >= x[-1] - OFFSET_WINDOW_S / self.nominal_period_s
         offset = float(above[recent].min())

@@ -146,6 +146,15 @@ class BalanceStream(ABC):
         single device, whose channels share one sample clock)."""
         return {}
 
+    def hold_alignment(self) -> None:
+        """Keep placing samples on the host clock as now until :meth:`release_alignment` (a set point's record is
+        taken in between); nothing to hold for a single device or a balance stamped by its own requests."""
+        return None
+
+    def release_alignment(self) -> None:
+        """Let the placement on the host clock follow the devices' timing again."""
+        return None
+
     def recording_description(self) -> dict[str, Any]:
         """What a recording stores about this stream beyond the rig file's route (empty: nothing more)."""
         return {}

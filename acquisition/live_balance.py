@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import threading
 from collections import deque
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -364,6 +366,16 @@ class LiveBalance:
             gaps = list(self._recorded_gaps)
         return sum(gap.missing_samples for gap in gaps if first_row < gap.row_index <= last_row)
 
+    @contextmanager
+    def alignment_held(self) -> Iterator[None]:
+        """While the block runs, the stream places every device's samples on the host clock as it does now
+        (:meth:`BalanceStream.hold_alignment`): a record's rows are all aligned alike."""
+        self.driver.hold_alignment()
+        try:
+            yield
+        finally:
+            self.driver.release_alignment()
+
     def measure(self, record_s: float, timeout_s: float) -> MeasuredRows:
         """Average the ``record_s`` of full-rate rows the board takes from now on (chosen by sample counter, as a
         sweep's set point is); blocks until they arrived (wall ``timeout_s``).
@@ -374,24 +386,25 @@ class LiveBalance:
         if not self.running:
             raise RuntimeError("the balance is not streaming: start() first")
         rows = max(1, int(round(record_s * self.sample_rate_hz)))
-        with self._lock:
-            first_counter = (
-                None
-                if self._first_counter is None
-                else self._first_counter + self.rig.balance_samples_since_start()
-            )
-            measurement = _Measurement(rows, self._recorder, first_counter)
-            self._measurement = measurement
-        try:
-            if not measurement.done.wait(timeout_s):
-                if self.error is not None:
-                    raise self.error
-                raise TimeoutError(
-                    f"{self.driver.name}: {rows} rows did not arrive within {timeout_s:g} s"
-                )
-        finally:
+        with self.alignment_held():  # the rows are taken from now on
             with self._lock:
-                self._measurement = None
+                first_counter = (
+                    None
+                    if self._first_counter is None
+                    else self._first_counter + self.rig.balance_samples_since_start()
+                )
+                measurement = _Measurement(rows, self._recorder, first_counter)
+                self._measurement = measurement
+            try:
+                if not measurement.done.wait(timeout_s):
+                    if self.error is not None:
+                        raise self.error
+                    raise TimeoutError(
+                        f"{self.driver.name}: {rows} rows did not arrive within {timeout_s:g} s"
+                    )
+            finally:
+                with self._lock:
+                    self._measurement = None
         first = measurement.first_row_index
         return MeasuredRows(
             mean_volts=measurement.sums / measurement.rows,

@@ -12,7 +12,8 @@ crystal). Like the auxiliary board's counter it is mapped to host time by a
 :class:`~ornitail.acquisition.aux_clock_model.CounterClockModel` fitted under the blocks' arrival times, so the
 records' sampling times are on the host clock (rig time) and :class:`AlignedBalance` interpolates them as it does
 the NETCANOEM's polls. When a lower arrival moves the line back, a record it would place at or before one already
-delivered is left out (the rows are interpolated across it).
+delivered is left out (the rows are interpolated across it). While a set point is recorded the line is held
+(:meth:`NetFtBalance.hold_alignment`).
 
 Link health: ``rdt_sequence`` gaps are lost samples; datagrams that are not whole records are resyncs and their
 bytes garbage. The device's status word (non-zero: e.g. a saturated gauge, manual section 18.2) flags a sample.
@@ -190,6 +191,14 @@ class NetFtBalance(NetFtDriver, TimedGaugeBalance):
                 f"({self.rdt_rate_hz:g} records/s, [balance.netft].rdt_rate_hz): set the device's RDT output "
                 "rate or the rig file",
             )
+
+    def hold_alignment(self) -> None:
+        """Place records with the ``ft_sequence`` line as it is now, until :meth:`release_alignment`."""
+        self._model.hold()
+
+    def release_alignment(self) -> None:
+        """Place records with the line refitted under every arrival again."""
+        self._model.release()
 
     def sample_time_uncertainty_s(self) -> float:
         """How sharply the ``ft_sequence`` line is known (its envelope), s; 0 before the first block."""

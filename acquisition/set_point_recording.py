@@ -112,30 +112,32 @@ class RecordConditions:
 def take_rows(
     context: RecordingContext, recorder: Recorder, count: int
 ) -> tuple[int, RecordConditions]:
-    """Wait for ``count`` rows sampled from now on; return the first one's row index and the conditions read
-    from then until they arrived."""
-    context.wait_rig_s(RECORD_START_DELAY_S)
-    samples_since_start = context.rig.balance_samples_since_start()
-    conditions = RecordConditions(samples_since_start, count)
-    first = None
-    rows_seen, rows_seen_at_s = recorder.next_sample_index, context.rig.now_s()
-    while True:
-        conditions.read(context.rig)
-        if conditions.motor_rpms:
-            context.observe_motor(conditions.motor_rpms[-1] > 0.0)
-        if first is None:
-            first = context.stream.first_row_sampled_after(samples_since_start)
-        if first is not None and recorder.next_sample_index >= first + count:
-            return first, conditions
-        if recorder.next_sample_index != rows_seen:
-            rows_seen, rows_seen_at_s = recorder.next_sample_index, context.rig.now_s()
-        elif context.rig.now_s() - rows_seen_at_s > ROWS_STALLED_S:
-            raise InstrumentDisconnected(
-                context.rig.balance.name,
-                f"no samples arrived for {ROWS_STALLED_S:g} s of rig time while recording a set point (the "
-                "stream's port is open but silent: a hung board or a stalled reader)",
-            )
-        context.wait_rig_s(POLL_INTERVAL_S)
+    """Wait for ``count`` rows sampled from now on, with the stream's alignment held until they arrived; return the
+    first one's row index and the conditions read from then on."""
+    # Every row of the record is placed on the host clock with the same counter lines (two devices' balance).
+    with context.stream.alignment_held():
+        context.wait_rig_s(RECORD_START_DELAY_S)
+        samples_since_start = context.rig.balance_samples_since_start()
+        conditions = RecordConditions(samples_since_start, count)
+        first = None
+        rows_seen, rows_seen_at_s = recorder.next_sample_index, context.rig.now_s()
+        while True:
+            conditions.read(context.rig)
+            if conditions.motor_rpms:
+                context.observe_motor(conditions.motor_rpms[-1] > 0.0)
+            if first is None:
+                first = context.stream.first_row_sampled_after(samples_since_start)
+            if first is not None and recorder.next_sample_index >= first + count:
+                return first, conditions
+            if recorder.next_sample_index != rows_seen:
+                rows_seen, rows_seen_at_s = recorder.next_sample_index, context.rig.now_s()
+            elif context.rig.now_s() - rows_seen_at_s > ROWS_STALLED_S:
+                raise InstrumentDisconnected(
+                    context.rig.balance.name,
+                    f"no samples arrived for {ROWS_STALLED_S:g} s of rig time while recording a set point (the "
+                    "stream's port is open but silent: a hung board or a stalled reader)",
+                )
+            context.wait_rig_s(POLL_INTERVAL_S)
 
 
 def record_set_point(

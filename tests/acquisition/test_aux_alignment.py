@@ -77,6 +77,42 @@ def test_clock_model_uses_the_nominal_rate_until_the_span_is_long_enough():
     assert np.all(above >= -1e-12)
 
 
+def test_a_rate_beyond_a_crystals_tolerance_is_clipped_to_it_not_reset_to_nominal():
+    """Deliveries that lag more and more (a starved reader) tilt the arrivals' floor far beyond any crystal. The fit
+    used to fall back to the nominal rate past 1000 ppm, so a tilt near that limit made the line jump by the slope
+    over the offset window (6.7 ms) each time the fit crossed it; clipped, both tilts give the same line."""
+    from ornitail.acquisition.aux_clock_model import CRYSTAL_TOLERANCE_PPM
+
+    rates = []
+    for tilt_ppm in (600.0, 1500.0):
+        model = CounterClockModel(1000.0)
+        counters = np.arange(1, 301) * 50 - 1  # 15 s of 50-sample blocks: 60 bins
+        arrivals = 2.0 + counters / 1000.0 * (1 + tilt_ppm * 1e-6) + 0.0005 * (np.arange(300) % 4)
+        for counter, arrival in zip(counters, arrivals, strict=True):
+            model.add(int(counter), float(arrival))
+        rates.append(model.fit().rate_error_ppm)
+    # clipped at the tolerance (a period 200 ppm long reads as -199.96 ppm fast)
+    assert rates == pytest.approx([-CRYSTAL_TOLERANCE_PPM] * 2, rel=1e-3)
+
+
+def test_a_held_line_stays_put_until_released():
+    """While a record is taken the line is held: a faster delivery (the line should move 5 ms back) changes
+    nothing until the hold is released."""
+    model = CounterClockModel(1000.0)
+    model.hold()  # before the first arrival there is nothing to hold
+    counters = np.arange(1, 21) * 100 - 1
+    for counter in counters:
+        model.add(int(counter), 3.0 + counter / 1000.0 + 0.006)
+    assert model.fit() is not None
+    model.hold()
+    held = model.fit()
+    model.add(2099, 3.0 + 2.099 + 0.001)  # delivered 5 ms faster than any before
+    assert model.fit() is held
+    assert held.time_of(2099) == pytest.approx(3.0 + 2.099 + 0.006)
+    model.release()
+    assert model.fit().time_of(2099) == pytest.approx(3.0 + 2.099 + 0.001)
+
+
 def test_board_calibration_must_be_the_cal_files():
     cal = np.array([[2.0, 0.5], [0.25, 4.0]])
     assert volts_per_gauge_count(cal * 3.125e-4, cal) == pytest.approx(3.125e-4)
@@ -172,6 +208,36 @@ def test_aligned_stream_matches_the_simulated_boards_true_sample_times(tmp_path,
         assert netft_error_s.min() >= -1.0 / 7000.0
         assert netft_error_s.max() <= 0.020
     assert values["aux_clock_points"] > 10 and values["alignment_error_estimate_s"] > 0
+
+
+def test_both_counter_lines_are_held_while_a_record_is_taken(tmp_path):
+    """A record's rows are placed with one line per device: while the alignment is held (as the sweep holds it
+    for each record), the Net F/T's and the auxiliary board's lines stay the ones fitted at the hold however many
+    blocks arrive; once released they follow the arrivals again (refitted after each block)."""
+    path = rig_copy(tmp_path, NETFT_AUX_RIG, {})
+    with Rig.from_file(path, time_scale=1.0) as rig:
+        balance = rig.balance
+        rig.set_flapping_frequency(12.0)
+        rig.start_balance()
+        live = LiveBalance(rig)
+        deadline = time.monotonic() + DEADLINE_S
+        while balance.read_block(timeout_s=0.5) is None:  # both devices streaming
+            assert time.monotonic() < deadline, "rows did not arrive"
+        models = (balance._model, balance.balance._model)
+        with live.alignment_held():
+            held = [model.fit() for model in models]
+            points = [model.points for model in models]
+            rows = 0
+            while rows < 0.5 * rig.description.balance_sample_rate_hz():  # 0.5 s of rows
+                assert time.monotonic() < deadline, "rows did not arrive"
+                block = balance.read_block(timeout_s=0.5)
+                rows += 0 if block is None else len(block.counters)
+            assert all(model.points > count for model, count in zip(models, points, strict=True))
+            assert all(model.fit() is line for model, line in zip(models, held, strict=True))
+        while balance.read_block(timeout_s=0.5) is None:
+            assert time.monotonic() < deadline, "rows did not arrive"
+        assert all(model.fit() is not line for model, line in zip(models, held, strict=True))
+        rig.stop_balance()
 
 
 def test_a_reader_that_fell_behind_catches_up_in_a_few_calls(tmp_path):
