@@ -103,6 +103,7 @@ class AlignedBalance(BalanceStream):
         self._t0 = 0.0
         self._next_row = 0
         self._rows_lost = 0
+        self._moved_while_held_s = 0.0
         self._poll_times = np.empty(0)
         self._poll_volts = np.empty((0, 6))
         self._poll_flags = np.empty(0, dtype=bool)
@@ -213,9 +214,11 @@ class AlignedBalance(BalanceStream):
         return self._emit()
 
     def alignment_values(self) -> dict[str, float | int]:
-        """The auxiliary clock's fit: rate error (ppm), latency jitter (rms, max), the envelope's sharpness and the
-        alignment estimate (that envelope plus the balance's own timing uncertainty: the CAN request frame, or the
-        Net F/T counter line's envelope), s; points fitted, the balance's rate and grid rows lost."""
+        """The auxiliary clock's fit: rate error (ppm), latency jitter (rms, max), the envelope's sharpness, how far
+        the balance's line moved against the board's while the last record held them, and the alignment estimate
+        (that envelope, plus the balance's own timing uncertainty: the CAN request frame or the Net F/T counter
+        line's envelope, plus that move: the held lines were off by as much), s; points fitted, the balance's rate
+        and grid rows lost."""
         fit = self._model.fit()
         if fit is None:
             return {}
@@ -224,7 +227,10 @@ class AlignedBalance(BalanceStream):
             "aux_clock_jitter_rms_s": fit.jitter_rms_s,
             "aux_clock_jitter_max_s": fit.jitter_max_s,
             "aux_clock_envelope_s": fit.envelope_s,
-            "alignment_error_estimate_s": fit.envelope_s + self.balance.sample_time_uncertainty_s(),
+            "alignment_moved_while_held_s": self._moved_while_held_s,
+            "alignment_error_estimate_s": fit.envelope_s
+            + self.balance.sample_time_uncertainty_s()
+            + abs(self._moved_while_held_s),
             "aux_clock_points": fit.points,
             "balance_sample_rate_hz": self.balance_rate_hz,
             "aligned_rows_lost": self._rows_lost,
@@ -236,10 +242,12 @@ class AlignedBalance(BalanceStream):
         self._model.hold()
         self.balance.hold_alignment()
 
-    def release_alignment(self) -> None:
-        """Let both lines follow their arrivals again."""
-        self._model.release()
-        self.balance.release_alignment()
+    def release_alignment(self) -> float:
+        """Let both lines follow their arrivals again; how far the balance's line moved against the auxiliary
+        board's while they were held, s (kept for :meth:`alignment_values`)."""
+        aux_moved_s = self._model.release()
+        self._moved_while_held_s = self.balance.release_alignment() - aux_moved_s
+        return self._moved_while_held_s
 
     def recording_description(self) -> dict[str, Any]:
         """The auxiliary board and the alignment method, for ``run.json``'s ``rig``."""

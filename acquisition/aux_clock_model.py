@@ -130,10 +130,17 @@ class CounterClockModel:
                 self._fit = self._fitted()
             self._held = self._fit
 
-    def release(self) -> None:
-        """:meth:`fit` follows the arrivals again."""
+    def release(self) -> float:
+        """:meth:`fit` follows the arrivals again; how far the line moved while it was held, at the newest arrival's
+        counter (the line now minus the held one, s; 0 when nothing was held)."""
         with self._lock:
-            self._held = None
+            held, self._held = self._held, None
+            if held is None:
+                return 0.0
+            if self._fit is None:
+                self._fit = self._fitted()
+            newest = self._counters[-1]
+            return float(self._fit.time_of(newest) - held.time_of(newest))
 
     def _fitted(self) -> ClockFit:
         reference = int(self._counters[0])

@@ -151,9 +151,10 @@ class BalanceStream(ABC):
         taken in between); nothing to hold for a single device or a balance stamped by its own requests."""
         return None
 
-    def release_alignment(self) -> None:
-        """Let the placement on the host clock follow the devices' timing again."""
-        return None
+    def release_alignment(self) -> float:
+        """Let the placement on the host clock follow the devices' timing again; how far it moved while held, s
+        (0 for a single device)."""
+        return 0.0
 
     def recording_description(self) -> dict[str, Any]:
         """What a recording stores about this stream beyond the rig file's route (empty: nothing more)."""

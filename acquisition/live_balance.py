@@ -374,7 +374,7 @@ class LiveBalance:
         try:
             yield
         finally:
-            self.driver.release_alignment()
+            self.driver.release_alignment()  # the move it kept out is in alignment_values()
 
     def measure(self, record_s: float, timeout_s: float) -> MeasuredRows:
         """Average the ``record_s`` of full-rate rows the board takes from now on (chosen by sample counter, as a

@@ -196,9 +196,9 @@ class NetFtBalance(NetFtDriver, TimedGaugeBalance):
         """Place records with the ``ft_sequence`` line as it is now, until :meth:`release_alignment`."""
         self._model.hold()
 
-    def release_alignment(self) -> None:
-        """Place records with the line refitted under every arrival again."""
-        self._model.release()
+    def release_alignment(self) -> float:
+        """Place records with the line refitted under every arrival again; how far it moved while held, s."""
+        return self._model.release()
 
     def sample_time_uncertainty_s(self) -> float:
         """How sharply the ``ft_sequence`` line is known (its envelope), s; 0 before the first block."""

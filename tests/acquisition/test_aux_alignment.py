@@ -109,8 +109,9 @@ def test_a_held_line_stays_put_until_released():
     model.add(2099, 3.0 + 2.099 + 0.001)  # delivered 5 ms faster than any before
     assert model.fit() is held
     assert held.time_of(2099) == pytest.approx(3.0 + 2.099 + 0.006)
-    model.release()
+    assert model.release() == pytest.approx(-0.005)  # how far it moved while held
     assert model.fit().time_of(2099) == pytest.approx(3.0 + 2.099 + 0.001)
+    assert model.release() == 0.0  # nothing held
 
 
 def test_board_calibration_must_be_the_cal_files():
@@ -237,6 +238,11 @@ def test_both_counter_lines_are_held_while_a_record_is_taken(tmp_path):
         while balance.read_block(timeout_s=0.5) is None:
             assert time.monotonic() < deadline, "rows did not arrive"
         assert all(model.fit() is not line for model, line in zip(models, held, strict=True))
+        # what the hold kept out (the balance's line against the board's) is journalled and widens the estimate
+        values = balance.alignment_values()
+        moved_s = values["alignment_moved_while_held_s"]
+        assert math.isfinite(moved_s)
+        assert values["alignment_error_estimate_s"] >= abs(moved_s)
         rig.stop_balance()
 
 
