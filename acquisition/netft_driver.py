@@ -385,7 +385,7 @@ class NetFtDriver:
                 self.blocks.put_nowait(None)
 
     def _deliver(self, data: bytearray, previous_sequence: int, host_time_s: float) -> int:
-        """Decode, count and queue one block; return its last ``rdt_sequence``."""
+        """Decode, count and queue one block; return the newest ``rdt_sequence`` received so far."""
         assert self.counts_per_unit is not None
         records = protocol.in_sequence_order(protocol.decode_records(bytes(data)))
         self.lost_records += protocol.lost_records(records.rdt_sequence, previous_sequence)
@@ -402,7 +402,7 @@ class NetFtDriver:
             self.blocks.put_nowait(block)
         except queue.Full:
             self.blocks_dropped += 1
-        return int(records.rdt_sequence[-1])
+        return protocol.newest_sequence(records.rdt_sequence, previous_sequence)
 
 
 def _reason(error: BaseException) -> str:

@@ -145,15 +145,29 @@ def sequence_steps(later: np.ndarray | int, earlier: np.ndarray | int) -> np.nda
 
 
 def lost_records(rdt_sequence: np.ndarray, previous: int) -> int:
-    """Records missing between ``previous`` and the end of ``rdt_sequence`` (uint32, wrapping at 2**32).
+    """Records skipped as the newest sequence number advances from ``previous`` through ``rdt_sequence`` (uint32,
+    wrapping at 2**32).
 
-    ``previous`` is the last sequence number received, or 0 before the first record of a request (the
-    device numbers a request's records from 1). A step backwards or a repeat (a reordered or duplicated
-    datagram) loses nothing.
+    ``previous`` is the newest sequence number received before (:func:`newest_sequence`), or 0 before the first
+    record of a request (the device numbers a request's records from 1). A repeat, or a record that arrives after
+    a later one (a duplicated or reordered datagram), moves nothing: the hole it fills was counted once, when the
+    later record skipped it.
     """
-    chain = np.concatenate([[previous], rdt_sequence.astype(np.int64)])
-    steps = sequence_steps(chain[1:], chain[:-1])
-    return int(np.sum(steps[steps > 1] - 1))
+    ahead = _steps_ahead(rdt_sequence, previous)
+    newest_before = np.maximum.accumulate(np.concatenate(([0], ahead)))[:-1]
+    advances = ahead - newest_before
+    return int(np.sum(advances[advances > 1] - 1))
+
+
+def newest_sequence(rdt_sequence: np.ndarray, previous: int) -> int:
+    """The newest sequence number of ``previous`` and ``rdt_sequence`` (wrapping at 2**32)."""
+    furthest = max(0, int(_steps_ahead(rdt_sequence, previous).max(initial=0)))
+    return (int(previous) + furthest) % SEQUENCE_MODULUS
+
+
+def _steps_ahead(rdt_sequence: np.ndarray, previous: int) -> np.ndarray:
+    """(n,) int64: how many records after ``previous`` each sequence number is (negative: before it)."""
+    return sequence_steps(rdt_sequence.astype(np.int64), np.int64(previous))
 
 
 def in_sequence_order(records: RdtRecords) -> RdtRecords:

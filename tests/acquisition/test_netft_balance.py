@@ -152,7 +152,9 @@ def test_a_datagram_overtaken_by_the_next_is_left_out_of_the_timed_stream():
     the records around it by 2-8 ms (steps of 0.05 ms and 10.3 ms between records 2 ms apart). The sample times
     step by the device's 2 ms, or 4 ms across a left-out record; 1 ms of slack is for the counter line's own
     refinement as lower arrival times come in (about 0.1-0.3 ms here after the first 100 records)."""
-    steps_s, _ = timed_sample_steps(350, late_rdt_sequences={120, 180, 240})
+    steps_s, counts = timed_sample_steps(350, late_rdt_sequences={120, 180, 240})
+    # a late record is lost to the stream only when its successor came a block before it, and then counted once
+    assert counts.lost_samples <= 3
     steps_s = steps_s[100:]
     off_period_s = np.minimum(np.abs(steps_s - 0.002), np.abs(steps_s - 0.004))
     assert np.all(off_period_s < 0.001), np.round(steps_s[off_period_s >= 0.001] * 1e3, 3)

@@ -103,10 +103,31 @@ def test_records_encode_to_the_manuals_layout_and_back_to_back_in_one_datagram()
         (2**32 - 2, [2**32 - 1, 0, 1], 0),  # rolls over to zero after 4294967295
         (2**32 - 1, [2], 2),  # 0 and 1 lost across the roll-over
         (10, [9, 10, 11], 0),  # a reordered or repeated datagram loses nothing
+        # 60 overtaken by 61 across two blocks: its hole was counted when 61 came (previous is the newest, 61), not
+        # again on the step from 60 to 62 (it was, until stop 36: two lost for one late record)
+        (61, [60, 62], 0),
+        (
+            10,
+            [12, 11, 13],
+            1,
+        ),  # the hole 12 skipped, counted once (the driver sorts a block before counting)
     ],
 )
 def test_lost_records_from_sequence_gaps(previous, sequence, lost):
     assert protocol.lost_records(np.array(sequence, dtype=np.uint32), previous) == lost
+
+
+@pytest.mark.parametrize(
+    ("previous", "sequence", "newest"),
+    [
+        (0, [1, 2, 3], 3),
+        (61, [60, 62], 62),
+        (61, [59, 60], 61),  # late records leave the newest where it was
+        (2**32 - 2, [2**32 - 1, 0, 1], 1),  # across the roll-over
+    ],
+)
+def test_the_newest_sequence_number_is_kept_across_late_records(previous, sequence, newest):
+    assert protocol.newest_sequence(np.array(sequence, dtype=np.uint32), previous) == newest
 
 
 @pytest.mark.parametrize(
