@@ -25,7 +25,7 @@ Each rate also gets its 95 % Wilson score interval (``rate_intervals_95``): with
 flights a seed, one false alarm is 0.25 with an interval of 0.05-0.70.
 
 ``python benchmarks/gap_realities.py [--sim-cases 10] [--independent-cases 12] [--seed 2018]
-[--out result.json] [--validation first-fold]``
+[--out result.json] [--validation first-fold] [--null-directions library-orthogonal]``
 
 ``python benchmarks/gap_realities.py --combine a.json b.json ... [--out pooled.json]`` pools the cases
 of earlier results (each seed's part once: a seed run as two processes, one per part, writes its
@@ -58,7 +58,12 @@ from ornitail.gap.flight_diagnosis import (
     read_record,
     residuals_of,
 )
-from ornitail.gap.model_spec import VALIDATION_DESIGNS, BaselineSpec, read_baseline_spec
+from ornitail.gap.model_spec import (
+    NULL_DIRECTIONS,
+    VALIDATION_DESIGNS,
+    BaselineSpec,
+    read_baseline_spec,
+)
 
 SEMI_REAL_CASES = (
     semi_real.InjectedCase(None),
@@ -111,9 +116,9 @@ def _within(result: dict[str, object], fresh: float) -> None:
     result["fresh_within_prediction_interval"] = bool(fresh_low <= fresh <= fresh_high)
 
 
-def _spec(path: Path, validation: str) -> BaselineSpec:
-    """The baseline file at ``path`` with ``validation`` as its validation design."""
-    return dataclasses.replace(read_baseline_spec(path), validation=validation)
+def _spec(path: Path, design: dict[str, str]) -> BaselineSpec:
+    """The baseline file at ``path`` with ``design``'s keys set (``validation``, ``null_directions``)."""
+    return dataclasses.replace(read_baseline_spec(path), **design)
 
 
 def _refit_fields(report: dict) -> dict[str, object]:
@@ -127,13 +132,13 @@ def _refit_fields(report: dict) -> dict[str, object]:
 
 
 def sim_part(
-    cases: int, seed: int, tick: Callable[[str], None], validation: str
+    cases: int, seed: int, tick: Callable[[str], None], design: dict[str, str]
 ) -> list[dict[str, object]]:
     results = []
     for index in range(cases):
         case = draw_sim_case(index, seed, independent_reality.MANOEUVRES)
         with tempfile.TemporaryDirectory(prefix="ornitail-gap-") as folder:
-            scored = run_sim_case(case, Path(folder), seed, validation)
+            scored = run_sim_case(case, Path(folder), seed, **design)
         truth = scored["true_effects"]
         result = {
             "expected": ",".join(sorted(truth)) or None,
@@ -156,14 +161,14 @@ def sim_part(
 
 
 def independent_part(
-    cases: int, seed: int, tick: Callable[[str], None], validation: str
+    cases: int, seed: int, tick: Callable[[str], None], design: dict[str, str]
 ) -> list[dict[str, object]]:
     results = []
     for index in range(cases):
         case = independent_reality.draw_case(index, seed)
         with tempfile.TemporaryDirectory(prefix="ornitail-gap-") as folder:
             log_path, spec_path = independent_reality.write_case(case, Path(folder))
-            diagnosis = diagnose_flight(_spec(spec_path, validation), [log_path], seed=seed)
+            diagnosis = diagnose_flight(_spec(spec_path, design), [log_path], seed=seed)
             expected = independent_reality.IN_LIBRARY.get(case.effect)
             result = _outcome(
                 diagnosis.report,
@@ -183,7 +188,7 @@ def independent_part(
 
 
 def semi_real_part(
-    seed: int, tick: Callable[[str], None], validation: str
+    seed: int, tick: Callable[[str], None], design: dict[str, str]
 ) -> list[dict[str, object]]:
     results = []
     with tempfile.TemporaryDirectory(prefix="ornitail-gap-") as folder:
@@ -192,7 +197,7 @@ def semi_real_part(
             log_path, spec_path = semi_real.write_case(
                 case, Path(folder) / str(index), model_file, derivative_refit=True
             )
-            report = diagnose_flight(_spec(spec_path, validation), [log_path], seed=seed).report
+            report = diagnose_flight(_spec(spec_path, design), [log_path], seed=seed).report
             expected, magnitude = case.expected
             result = _outcome(report, expected, magnitude, True)
             result["effect"], result["magnitude"] = case.effect, case.magnitude
@@ -295,16 +300,25 @@ def summarise(results: list[dict[str, object]]) -> dict[str, object]:
 
 
 def combine(paths: list[Path]) -> dict[str, object]:
-    """Earlier results (``--out`` files) pooled: per part, each seed's cases once (the longest list
-    any file holds for that seed: a seed's parts run as separate processes each carry the same
-    semi-real cases), scored by :func:`summarise`."""
+    """Earlier results (``--out`` files, all of one design: validation and null directions) pooled:
+    per part, each seed's cases once (the longest list any file holds for that seed: a seed's parts
+    run as separate processes each carry the same semi-real cases), scored by :func:`summarise`."""
     by_part: dict[str, dict[int, list]] = {}
+    designs: dict[tuple[str, str], Path] = {}
     for path in paths:
         try:
             result = json.loads(path.read_text())
             seed, parts = int(result["seed"]), result["results"]
+            design = (result["validation"], result.get("null_directions", "any"))
         except (OSError, ValueError, KeyError, TypeError) as error:
             raise SystemExit(f"{path}: not a gap_realities result file ({error})") from None
+        designs.setdefault(design, path)
+        if len(designs) > 1:
+            other = next(where for kept, where in designs.items() if kept != design)
+            raise SystemExit(
+                f"{path}: validation {design[0]!r}, null_directions {design[1]!r}; {other} differs: "
+                "results of different designs are not pooled"
+            )
         for part, cases in parts.items():
             kept = by_part.setdefault(part, {})
             if len(cases) > len(kept.get(seed, [])):
@@ -335,6 +349,12 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
         help="the baseline files' [baseline].validation (first-fold: the first fold's validation runs alone)",
     )
     parser.add_argument(
+        "--null-directions",
+        choices=NULL_DIRECTIONS,
+        default="any",
+        help="the baseline files' [baseline].null_directions (library-orthogonal: not yet the default)",
+    )
+    parser.add_argument(
         "--combine", type=Path, nargs="+", metavar="RESULT", help="pool earlier --out files"
     )
     arguments = parser.parse_args(argv)
@@ -349,16 +369,15 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
     def tick(what: str) -> None:
         print(f"[{time.monotonic() - started:7.1f} s] {what}", file=sys.stderr, flush=True)
 
+    design = {"validation": arguments.validation, "null_directions": arguments.null_directions}
     parts = {
-        "semi_real": semi_real_part(arguments.seed, tick, arguments.validation),
-        "independent": independent_part(
-            arguments.independent_cases, arguments.seed, tick, arguments.validation
-        ),
-        "sim": sim_part(arguments.sim_cases, arguments.seed, tick, arguments.validation),
+        "semi_real": semi_real_part(arguments.seed, tick, design),
+        "independent": independent_part(arguments.independent_cases, arguments.seed, tick, design),
+        "sim": sim_part(arguments.sim_cases, arguments.seed, tick, design),
     }
     result = {
         "seed": arguments.seed,
-        "validation": arguments.validation,
+        **design,
         "scores": {name: summarise(results) for name, results in parts.items()},
         "results": parts,
     }

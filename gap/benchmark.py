@@ -91,13 +91,12 @@ def fresh_flight_closure(case: WithheldCase, diagnosis: FlightDiagnosis, folder:
     return 1.0 - float(np.sqrt(energy(diagnosis.chosen) / energy(diagnosis.baseline)))
 
 
-def run_case(
-    case: WithheldCase, folder: Path, seed: int, validation: str = "all-folds"
-) -> dict[str, object]:
+def run_case(case: WithheldCase, folder: Path, seed: int, **design: str) -> dict[str, object]:
     """Fly, write, diagnose blind, and score one case (and, when an effect is named, its closure
-    on a fresh flight of the same case against the reported intervals)."""
+    on a fresh flight of the same case against the reported intervals); ``design``: baseline-file
+    keys to set (``validation``, ``null_directions``)."""
     log_path = write_flight_log_csv(simulate_withheld_log(case), folder / "flight.csv")
-    spec = dataclasses.replace(case.baseline_spec(), validation=validation)
+    spec = dataclasses.replace(case.baseline_spec(), **design)
     spec_path = write_baseline_spec(spec, folder / "baseline.toml")
     diagnosis = diagnose_flight(read_baseline_spec(spec_path), [log_path], seed=seed)
     report = diagnosis.report

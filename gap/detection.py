@@ -29,6 +29,7 @@ accounted for the luck of the contest: the simultaneous bound does.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -96,25 +97,49 @@ def random_matrix_directions(
     draws: int,
     seed: int,
     dynamic_rows: tuple[int, ...] = (0, 1, 2),
+    named_steps: Sequence[np.ndarray] = (),
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """``draws`` random directions (dA, dB) in the entries of the ``dynamic_rows`` of A and B (the
     simulator's q, u, w rows; a model file's rows with parameters), each entry scaled by its own
     size (zero entries stay zero) and the whole normalised to a unit RMS relative change, so a
     magnitude of 1 changes entries by about 100 % of themselves. Kinematic rows (theta' = q) are
-    left alone, as every candidate leaves them."""
+    left alone, as every candidate leaves them.
+
+    ``named_steps``: changes [dA dB] (rows, A's columns + B's) that the library's candidates make
+    (:func:`library_orthogonal_basis`); each direction is first stripped of its part along them, in
+    the entries relative to their size, so that it names nothing the library names. Until none is
+    left: the directions keep at least one free entry."""
     generator = np.random.default_rng([seed, 15])
     joined = np.hstack([a_matrix, b_matrix])
     size = np.zeros_like(joined)
     rows = list(dynamic_rows)
     size[rows] = np.abs(joined[rows])
     active = size > 0
+    basis = library_orthogonal_basis(named_steps, size)
     directions = []
     for _ in range(draws):
         relative = generator.standard_normal(joined.shape) * active
+        if basis is not None:
+            relative[active] -= basis @ (basis.T @ relative[active])
         relative /= np.sqrt(np.mean(relative[active] ** 2))
         step = relative * size
         directions.append((step[:, : a_matrix.shape[1]], step[:, a_matrix.shape[1] :]))
     return directions
+
+
+def library_orthogonal_basis(
+    named_steps: Sequence[np.ndarray], size: np.ndarray
+) -> np.ndarray | None:
+    """Orthonormal columns spanning ``named_steps`` in the entries where ``size`` > 0, each entry
+    divided by its size (None without steps); at most one fewer columns than entries."""
+    active = size > 0
+    relative = [step[active] / size[active] for step in named_steps if np.any(step[active])]
+    if not relative:
+        return None
+    columns = np.array(relative).T
+    left, singular, _ = np.linalg.svd(columns, full_matrices=False)
+    rank = int(np.count_nonzero(singular > singular[0] * 1e-9))
+    return left[:, : min(rank, int(np.count_nonzero(active)) - 1)]
 
 
 def random_feature_steps(

@@ -221,14 +221,16 @@ def null_energies(
     scales: np.ndarray,
     seed: int,
     draws: int = NULL_DRAWS,
+    named_steps: Sequence[np.ndarray] = (),
 ) -> tuple[float, np.ndarray]:
     """``start``'s weighted squared residual on the ``validation`` runs, and each of ``draws``
-    random directions' in A and B (:mod:`ornitail.gap.detection`) fitted on the ``training`` runs
-    within :data:`NULL_BOUNDS` (channels divided by ``scales``, SI per channel)."""
+    random directions' in A and B (:mod:`ornitail.gap.detection`; orthogonal to ``named_steps``)
+    fitted on the ``training`` runs within :data:`NULL_BOUNDS` (channels divided by ``scales``, SI
+    per channel)."""
     start_sse = float(_channel_sse(residuals_of(start, validation), scales).sum())
     after = []
     for a_step, b_step in random_matrix_directions(
-        start.a_matrix, start.b_matrix, draws, seed, start.dynamic_rows
+        start.a_matrix, start.b_matrix, draws, seed, start.dynamic_rows, named_steps
     ):
 
         def family(k: float, a_step=a_step, b_step=b_step) -> LinearFlightModel:
@@ -239,12 +241,31 @@ def null_energies(
     return start_sse, np.array(after)
 
 
-def rule_from_energies(start_sse: float, after_sse: np.ndarray) -> DetectionRule:
+def library_matrix_steps(library: Sequence[FlightCandidate]) -> list[np.ndarray]:
+    """The change [dA dB] each candidate makes to the baseline at 1 % of its range (candidates that
+    change neither, such as a delay or an output bias, give none)."""
+    steps = []
+    for candidate in library:
+        small = 0.01 * max(abs(bound) for bound in candidate.bounds)
+        changed, base = candidate.build(small), candidate.build(0.0)
+        if changed.a_matrix.shape != base.a_matrix.shape:
+            continue
+        step = np.hstack([changed.a_matrix - base.a_matrix, changed.b_matrix - base.b_matrix])
+        if np.any(step):
+            steps.append(step)
+    return steps
+
+
+def rule_from_energies(
+    start_sse: float, after_sse: np.ndarray, named_steps: Sequence[np.ndarray] = ()
+) -> DetectionRule:
     """The rule whose null closures are the directions' (``after_sse``) against ``start_sse``."""
-    return DetectionRule(
-        NULL_METHOD.format(draws=len(after_sse)),
-        np.array([closure_of(start_sse, after) for after in after_sse]),
-    )
+    method = NULL_METHOD.format(draws=len(after_sse))
+    if named_steps:
+        method += (
+            f", each orthogonal to the {len(named_steps)} changes the library's candidates make"
+        )
+    return DetectionRule(method, np.array([closure_of(start_sse, after) for after in after_sse]))
 
 
 def _library_scores(
@@ -254,11 +275,13 @@ def _library_scores(
     split: _Split,
     first: tuple[FlightCandidate, float] | None = None,
     calibrate: bool = True,
+    named_steps: Sequence[np.ndarray] = (),
 ) -> tuple[FoldScores, dict[str, LinearFlightModel]]:
     """Fit every candidate on the training runs and score it on the validation runs against
     ``start``: alone (``first`` None, ``start`` = ``baseline``), or together with the ``first``
     (candidate, magnitude) whose model is ``start``, both magnitudes refitted. With ``calibrate``
-    the null directions are fitted and scored too (else their energies are empty).
+    the null directions (orthogonal to ``named_steps``) are fitted and scored too (else their
+    energies are empty).
 
     Returns the fold's scores and each candidate's model.
     """
@@ -290,7 +313,14 @@ def _library_scores(
             )
         )
     null_start, null_after = (
-        null_energies(start, split.training, split.validation, split.scales, split.seed)
+        null_energies(
+            start,
+            split.training,
+            split.validation,
+            split.scales,
+            split.seed,
+            named_steps=named_steps,
+        )
         if calibrate
         else (0.0, np.zeros(0))
     )
@@ -428,6 +458,9 @@ def diagnose_flight(
         record.varying_inputs,
     )
     library = candidates.candidates
+    named_steps = (
+        library_matrix_steps(library) if spec.null_directions == "library-orthogonal" else []
+    )
     # every fold fits and scores the library; the first fold's validation runs rank and calibrate
     # the rule, or every fold's pooled (spec.validation, docs/gap-diagnosis.md)
     pooled = spec.validation == "all-folds"
@@ -435,13 +468,18 @@ def diagnose_flight(
     for fold, part in enumerate(splits, start=1):
         fold_split = split if fold == 1 else _fold(runs, part, baseline, seed)[0]
         scores, models = _library_scores(
-            library, baseline, baseline, fold_split, calibrate=pooled or fold == 1
+            library,
+            baseline,
+            baseline,
+            fold_split,
+            calibrate=pooled or fold == 1,
+            named_steps=named_steps,
         )
         fold_scores.append(scores)
         fold_models.append(models)
         step(fold, f"fold {fold} of {len(splits)}: library fitted")
     deciding = pool_folds(fold_scores) if pooled else fold_scores[0]
-    rule = rule_from_energies(deciding.null_start_sse, deciding.null_after_sse)
+    rule = rule_from_energies(deciding.null_start_sse, deciding.null_after_sse, named_steps)
     ranking = _rank(deciding, seed, rule, bonferroni_t=pooled)
     chosen_model = fold_models[0][ranking.entries[0].name]
     first_test = [runs[i] for i in splits[0].test]
@@ -451,8 +489,12 @@ def diagnose_flight(
         first = (next(c for c in library if c.name == top.name), top.magnitude)
         rest = [c for c in library if c.name not in ranking.top_set]
         if rest:
-            scores, models = _library_scores(rest, chosen_model, baseline, split, first)
-            second_rule = rule_from_energies(scores.null_start_sse, scores.null_after_sse)
+            scores, models = _library_scores(
+                rest, chosen_model, baseline, split, first, named_steps=named_steps
+            )
+            second_rule = rule_from_energies(
+                scores.null_start_sse, scores.null_after_sse, named_steps
+            )
             second = (_rank(scores, seed, second_rule), models, second_rule)
     step(len(splits) + 1, "second effect")
     # how far: every run is a test run once, scored with the effect its own fold chose on its own

@@ -11,6 +11,8 @@ effects_off = ["added_mass"]    # simulator effects the baseline leaves out
 # segment_s = 1.0               # linear_model: cut logs into segments of this many seconds
 # derivative_refit = false      # linear_model: skip the re-fit of the model's own derivatives (default: true)
 # validation = "first-fold"     # rank and detect on the first fold's validation runs only (default: all-folds)
+# null_directions = "library-orthogonal"   # flight: null directions stripped of what the library's candidates
+#                                          # change (default: "any"; not yet the default, docs/gap-diagnosis.md)
 ```
 
 ``tail`` and ``x_h_mm`` are required for the simulator and optional for a model file (they then
@@ -32,6 +34,9 @@ from ornitail.vehicle.geometry import require_tail_position_mm, study_tail_geome
 
 BASELINE_KINDS = ("simulator", "linear_model")
 VALIDATION_DESIGNS = ("first-fold", "all-folds")
+NULL_DIRECTIONS = ("any", "library-orthogonal")
+"""The detection rule's random directions of A and B (flight): any ("any", the default), or stripped of their part
+along the changes the library's candidates make ("library-orthogonal", being evaluated: docs/gap-diagnosis.md)."""
 """Which validation runs rank the candidates and calibrate the detection rule: every fold's pooled
 ("all-folds", the default), or the first fold's alone ("first-fold", the design before: docs/gap-diagnosis.md)."""
 
@@ -51,6 +56,7 @@ class BaselineSpec:
     # re-fit the model's derivatives too; None: yes for a linear_model
     derivative_refit: bool | None = None
     validation: str = "all-folds"  # one of VALIDATION_DESIGNS
+    null_directions: str = "any"  # one of NULL_DIRECTIONS
 
     def __post_init__(self) -> None:
         if self.derivative_refit is None:
@@ -93,6 +99,7 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
             "segment_s",
             "derivative_refit",
             "validation",
+            "null_directions",
         ),
     )
     kind = table.text("kind", choices=BASELINE_KINDS)
@@ -106,6 +113,7 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
     segment_s = table.number("segment_s", None, positive=True)
     refit = table.boolean("derivative_refit", None)
     validation = table.text("validation", "all-folds", choices=VALIDATION_DESIGNS)
+    null_directions = table.text("null_directions", "any", choices=NULL_DIRECTIONS)
     for key, given in (("segment_s", segment_s is not None), ("derivative_refit", bool(refit))):
         if given and kind != "linear_model":
             raise UserInputError(table.where(key), "only for kind = linear_model (a model file)")
@@ -123,6 +131,7 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
         segment_s=segment_s,
         derivative_refit=refit,
         validation=validation,
+        null_directions=null_directions,
         effects_off=_names(table, "effects_off", EFFECT_NAMES),
         model=model,
         candidates=_names(table, "candidates", None),
@@ -144,6 +153,8 @@ def write_baseline_spec(spec: BaselineSpec, path: str | Path) -> Path:
         lines.append("derivative_refit = false")
     if spec.validation != "all-folds":
         lines.append(f'validation = "{spec.validation}"')
+    if spec.null_directions != "any":
+        lines.append(f'null_directions = "{spec.null_directions}"')
     if spec.model:
         lines.append(f'model = "{spec.model}"')
     if spec.candidates:

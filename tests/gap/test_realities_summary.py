@@ -79,8 +79,11 @@ def test_wilson_intervals_match_the_closed_form_and_stay_inside_zero_and_one():
     assert scores["rate_intervals_95"]["out_of_library_unexplained_or_nearest_derivative"] is None
 
 
-def _result_file(path, seed, parts):
-    path.write_text(json.dumps({"seed": seed, "results": parts}))
+def _result_file(path, seed, parts, **design):
+    """A result file; files written before the null-directions option have no such key ("any")."""
+    path.write_text(
+        json.dumps({"seed": seed, "validation": "all-folds", **design, "results": parts})
+    )
     return path
 
 
@@ -107,6 +110,23 @@ def test_combine_pools_every_seed_once_per_part(tmp_path):
     assert pooled["scores"]["semi_real"]["named_in_library"] == "2 of 2"
     assert pooled["scores"]["sim"]["false_alarms_on_no_effect"] == "1 of 3"
     assert pooled["scores"]["independent"]["false_alarms_derivative_level"] == "1 of 1"
+
+
+def test_results_of_different_designs_are_not_pooled(tmp_path):
+    files = [
+        _result_file(tmp_path / "any.json", 1, {"sim": [case(None, "none", None)]}),
+        _result_file(
+            tmp_path / "orthogonal.json",
+            2,
+            {"sim": [case(None, "none", None)]},
+            null_directions="library-orthogonal",
+        ),
+    ]
+    with pytest.raises(
+        SystemExit, match=r"orthogonal.json: .*'library-orthogonal'; .*any.json differs"
+    ):
+        combine(files)
+    assert combine(files[:1])["scores"]["sim"]["false_alarms_on_no_effect"] == "0 of 1"
 
 
 def test_a_file_that_is_not_a_result_is_named_in_one_line(tmp_path):

@@ -1,0 +1,78 @@
+"""The detection rule's random directions of A and B, and their library-orthogonal variant."""
+
+import numpy as np
+import pytest
+
+from ornitail.core.errors import UserInputError
+from ornitail.gap.detection import library_orthogonal_basis, random_matrix_directions
+from ornitail.gap.model_spec import BaselineSpec, read_baseline_spec, write_baseline_spec
+
+# a longitudinal A (q, u, w, theta) and B (elevator) with the kinematic row theta' = q
+A = np.array(
+    [
+        [-2.0, 0.3, -1.1, 0.0],
+        [0.1, -0.4, 0.2, -9.81],
+        [1.5, -0.6, -3.0, 0.4],
+        [1.0, 0.0, 0.0, 0.0],
+    ]
+)
+B = np.array([[-20.0], [0.5], [-3.0], [0.0]])
+
+
+def relative(step: np.ndarray) -> np.ndarray:
+    """A change [dA dB] as a fraction of each dynamic-row entry (the space the directions live in)."""
+    joined = np.hstack([A, B])[:3]
+    return step[:3][joined != 0] / np.abs(joined[joined != 0])
+
+
+def test_directions_keep_their_draws_and_lose_their_part_along_the_named_changes():
+    inertia = np.zeros((4, 5))
+    inertia[0] = -0.01 * np.hstack([A, B])[0]  # a pitch-inertia change scales the q row
+    single = np.zeros((4, 5))
+    single[2, 2] = 0.03  # one derivative: Z_w
+    plain = random_matrix_directions(A, B, 6, seed=7, dynamic_rows=(0, 1, 2))
+    stripped = random_matrix_directions(
+        A, B, 6, seed=7, dynamic_rows=(0, 1, 2), named_steps=[inertia, single]
+    )
+    named = np.array([relative(inertia), relative(single)])
+    for (a_plain, b_plain), (a_step, b_step) in zip(plain, stripped, strict=True):
+        step = np.hstack([a_step, b_step])
+        assert not step[3].any()  # the kinematic row stays
+        along = named @ relative(step)
+        assert along == pytest.approx([0.0, 0.0], abs=1e-12)  # nothing left along either change
+        assert np.sqrt(np.mean(relative(step) ** 2)) == pytest.approx(
+            1.0
+        )  # unit RMS relative change
+        # the same draw less its part along the named changes: the plain direction lies in their span with it
+        together = np.vstack([named, relative(step), relative(np.hstack([a_plain, b_plain]))])
+        assert np.linalg.matrix_rank(together, tol=1e-9) == 3
+
+
+def test_the_basis_leaves_at_least_one_free_entry():
+    size = np.abs(np.hstack([A, B]))
+    size[3] = 0.0
+    active = int(np.count_nonzero(size))
+    every_entry = []
+    for index in zip(*np.nonzero(size), strict=True):
+        step = np.zeros_like(size)
+        step[index] = size[index]
+        every_entry.append(step)
+    basis = library_orthogonal_basis(every_entry, size)
+    assert basis.shape == (active, active - 1)
+    assert library_orthogonal_basis([], size) is None
+
+
+def test_the_baseline_file_takes_null_directions_and_refuses_other_values(tmp_path):
+    spec = BaselineSpec(
+        kind="simulator", tail="S3", x_h_mm=98.0, null_directions="library-orthogonal"
+    )
+    assert read_baseline_spec(write_baseline_spec(spec, tmp_path / "b.toml")).null_directions == (
+        "library-orthogonal"
+    )
+    bad = tmp_path / "bad.toml"
+    bad.write_text(
+        '[baseline]\nkind = "simulator"\ntail = "S3"\nx_h_mm = 98\nnull_directions = "orthogonal"\n'
+    )
+    with pytest.raises(UserInputError, match=r"bad.toml: \[baseline\].null_directions") as raised:
+        read_baseline_spec(bad)
+    assert "\n" not in str(raised.value)
