@@ -106,9 +106,9 @@ def random_matrix_directions(
     left alone, as every candidate leaves them.
 
     ``named_steps``: changes [dA dB] (rows, A's columns + B's) that the library's candidates make
-    (:func:`library_orthogonal_basis`); each direction is first stripped of its part along them, in
-    the entries relative to their size, so that it names nothing the library names. Until none is
-    left: the directions keep at least one free entry."""
+    (``gap.flight_diagnosis.library_matrix_steps``); each direction is first stripped of its part
+    along them (:func:`library_orthogonal_basis`), in the entries relative to their size, so that it
+    names nothing the library names, keeping at least one free dimension."""
     generator = np.random.default_rng([seed, 15])
     joined = np.hstack([a_matrix, b_matrix])
     size = np.zeros_like(joined)

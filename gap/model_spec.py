@@ -63,6 +63,17 @@ class BaselineSpec:
             object.__setattr__(self, "derivative_refit", self.kind == "linear_model")
 
 
+def require_flight_null_directions(spec: BaselineSpec, data: str) -> None:
+    """Refuse ``null_directions`` other than "any" for ``data`` (tunnel or steady-state tables), whose null is drawn
+    from the configuration variables, not from a flight model's A and B."""
+    if spec.null_directions != "any":
+        raise UserInputError(
+            f"{spec.source}: [baseline].null_directions",
+            f"{spec.null_directions!r} is only for flight logs; {data} draw their null from the configuration "
+            "variables",
+        )
+
+
 def _names(table: TomlTable, key: str, known: tuple[str, ...] | None) -> tuple[str, ...]:
     value = table.get(key, [])
     if not isinstance(value, list) or not all(isinstance(item, str) for item in value):

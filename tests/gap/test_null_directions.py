@@ -1,11 +1,15 @@
 """The detection rule's random directions of A and B, and their library-orthogonal variant."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from ornitail.core.errors import UserInputError
 from ornitail.gap.detection import library_orthogonal_basis, random_matrix_directions
 from ornitail.gap.model_spec import BaselineSpec, read_baseline_spec, write_baseline_spec
+from ornitail.gap.steady_diagnosis import diagnose_steady
+from ornitail.gap.tunnel_diagnosis import diagnose_tunnel
 
 # a longitudinal A (q, u, w, theta) and B (elevator) with the kinematic row theta' = q
 A = np.array(
@@ -76,3 +80,22 @@ def test_the_baseline_file_takes_null_directions_and_refuses_other_values(tmp_pa
     with pytest.raises(UserInputError, match=r"bad.toml: \[baseline\].null_directions") as raised:
         read_baseline_spec(bad)
     assert "\n" not in str(raised.value)
+
+
+@pytest.mark.parametrize("data", ["tunnel", "steady"])
+def test_tables_refuse_the_flight_only_null_directions_in_one_line(tmp_path, data):
+    spec = BaselineSpec(
+        kind="simulator",
+        tail="S3",
+        x_h_mm=98.0,
+        null_directions="library-orthogonal",
+        source=str(tmp_path / "baseline.toml"),
+    )
+    with pytest.raises(
+        UserInputError, match=r"baseline.toml: \[baseline\].null_directions"
+    ) as raised:
+        if data == "tunnel":
+            diagnose_tunnel(spec, [Path("points.csv")], seed=1)
+        else:
+            diagnose_steady(spec, Path("steady.csv"), seed=1)
+    assert "only for flight logs" in str(raised.value) and "\n" not in str(raised.value)
