@@ -25,7 +25,7 @@ Each rate also gets its 95 % Wilson score interval (``rate_intervals_95``): with
 flights a seed, one false alarm is 0.25 with an interval of 0.05-0.70.
 
 ``python benchmarks/gap_realities.py [--sim-cases 10] [--independent-cases 12] [--seed 2018]
-[--out result.json] [--validation first-fold] [--null-directions library-orthogonal]``
+[--out result.json] [--validation first-fold] [--null-directions top-set-orthogonal]``
 
 ``python benchmarks/gap_realities.py --combine a.json b.json ... [--out pooled.json]`` pools the cases
 of earlier results (each seed's part once: a seed run as two processes, one per part, writes its
@@ -352,7 +352,7 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
         "--null-directions",
         choices=NULL_DIRECTIONS,
         default="any",
-        help="the baseline files' [baseline].null_directions (library-orthogonal: not yet the default)",
+        help="the baseline files' [baseline].null_directions (other than any: not yet the default)",
     )
     parser.add_argument(
         "--combine", type=Path, nargs="+", metavar="RESULT", help="pool earlier --out files"

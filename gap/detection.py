@@ -98,6 +98,7 @@ def random_matrix_directions(
     seed: int,
     dynamic_rows: tuple[int, ...] = (0, 1, 2),
     named_steps: Sequence[np.ndarray] = (),
+    response_gradients: Sequence[np.ndarray] = (),
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """``draws`` random directions (dA, dB) in the entries of the ``dynamic_rows`` of A and B (the
     simulator's q, u, w rows; a model file's rows with parameters), each entry scaled by its own
@@ -107,15 +108,20 @@ def random_matrix_directions(
 
     ``named_steps``: changes [dA dB] (rows, A's columns + B's) that the library's candidates make
     (``gap.flight_diagnosis.library_matrix_steps``); each direction is first stripped of its part
-    along them (:func:`library_orthogonal_basis`), in the entries relative to their size, so that it
-    names nothing the library names, keeping at least one free dimension."""
+    along them (:func:`stripped_basis`), in the entries relative to their size, so that it
+    names nothing the library names, keeping at least one free dimension.
+
+    ``response_gradients``: for each effect under test, the gradient over the entries of A and B
+    (same shape) of the overlap between an entry change's first-order output response and the
+    effect's (``gap.null_response.response_gradients``); each direction is stripped of its part
+    along them, so its first-order response shares nothing with any of those effects."""
     generator = np.random.default_rng([seed, 15])
     joined = np.hstack([a_matrix, b_matrix])
     size = np.zeros_like(joined)
     rows = list(dynamic_rows)
     size[rows] = np.abs(joined[rows])
     active = size > 0
-    basis = library_orthogonal_basis(named_steps, size)
+    basis = stripped_basis(named_steps, size, response_gradients)
     directions = []
     for _ in range(draws):
         relative = generator.standard_normal(joined.shape) * active
@@ -127,13 +133,22 @@ def random_matrix_directions(
     return directions
 
 
-def library_orthogonal_basis(
-    named_steps: Sequence[np.ndarray], size: np.ndarray
+def stripped_basis(
+    named_steps: Sequence[np.ndarray],
+    size: np.ndarray,
+    response_gradients: Sequence[np.ndarray] = (),
 ) -> np.ndarray | None:
-    """Orthonormal columns spanning ``named_steps`` in the entries where ``size`` > 0, each entry
-    divided by its size (None without steps); at most one fewer columns than entries."""
+    """Orthonormal columns, in the entries where ``size`` > 0 relative to their size, spanning the
+    ``named_steps`` (each entry divided by its size) and the ``response_gradients`` (each entry
+    times its size: the gradient with respect to the relative change); None without either; at most
+    one fewer columns than entries."""
     active = size > 0
     relative = [step[active] / size[active] for step in named_steps if np.any(step[active])]
+    relative += [
+        gradient[active] * size[active]
+        for gradient in response_gradients
+        if np.any(gradient[active])
+    ]
     if not relative:
         return None
     columns = np.array(relative).T

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -63,6 +64,7 @@ from ornitail.gap.flight_model import LinearFlightModel, simulate_runs, superpos
 from ornitail.gap.intervals import closure_with_interval
 from ornitail.gap.magnitude_fit import fit_magnitude
 from ornitail.gap.model_spec import BaselineSpec
+from ornitail.gap.null_response import response_gradients
 from ornitail.gap.pooled_validation import FoldScores, pool_folds
 from ornitail.gap.ranking import CandidateEvidence, Ranking, rank_candidates
 from ornitail.gap.report import assemble_report, magnitude_field
@@ -222,15 +224,22 @@ def null_energies(
     seed: int,
     draws: int = NULL_DRAWS,
     named_steps: Sequence[np.ndarray] = (),
+    response_gradients: Sequence[np.ndarray] = (),
 ) -> tuple[float, np.ndarray]:
     """``start``'s weighted squared residual on the ``validation`` runs, and each of ``draws``
-    random directions' in A and B (:mod:`ornitail.gap.detection`; orthogonal to ``named_steps``)
-    fitted on the ``training`` runs within :data:`NULL_BOUNDS` (channels divided by ``scales``, SI
-    per channel)."""
+    random directions' in A and B (:mod:`ornitail.gap.detection`; orthogonal to ``named_steps``
+    and to ``response_gradients``) fitted on the ``training`` runs within :data:`NULL_BOUNDS`
+    (channels divided by ``scales``, SI per channel)."""
     start_sse = float(_channel_sse(residuals_of(start, validation), scales).sum())
     after = []
     for a_step, b_step in random_matrix_directions(
-        start.a_matrix, start.b_matrix, draws, seed, start.dynamic_rows, named_steps
+        start.a_matrix,
+        start.b_matrix,
+        draws,
+        seed,
+        start.dynamic_rows,
+        named_steps,
+        response_gradients,
     ):
 
         def family(k: float, a_step=a_step, b_step=b_step) -> LinearFlightModel:
@@ -246,7 +255,7 @@ def library_matrix_steps(library: Sequence[FlightCandidate]) -> list[np.ndarray]
     change neither, such as a delay or an output bias, give none)."""
     steps = []
     for candidate in library:
-        small = 0.01 * max(abs(bound) for bound in candidate.bounds)
+        small = 0.01 * _reach(candidate)
         changed, base = candidate.build(small), candidate.build(0.0)
         if changed.a_matrix.shape != base.a_matrix.shape:
             continue
@@ -257,15 +266,77 @@ def library_matrix_steps(library: Sequence[FlightCandidate]) -> list[np.ndarray]
 
 
 def rule_from_energies(
-    start_sse: float, after_sse: np.ndarray, named_steps: Sequence[np.ndarray] = ()
+    start_sse: float, after_sse: np.ndarray, orthogonal_to: str = ""
 ) -> DetectionRule:
-    """The rule whose null closures are the directions' (``after_sse``) against ``start_sse``."""
+    """The rule whose null closures are the directions' (``after_sse``) against ``start_sse``;
+    ``orthogonal_to`` names the changes the directions were stripped of (empty: none)."""
     method = NULL_METHOD.format(draws=len(after_sse))
-    if named_steps:
-        method += (
-            f", each orthogonal to the {len(named_steps)} changes the library's candidates make"
-        )
+    if orthogonal_to:
+        method += f", each orthogonal to {orthogonal_to}"
     return DetectionRule(method, np.array([closure_of(start_sse, after) for after in after_sse]))
+
+
+def _ranked_with_rule(
+    scores: FoldScores,
+    library: Sequence[FlightCandidate],
+    design: str,
+    null_of: Callable[[Sequence[FlightCandidate]], tuple[float, np.ndarray]],
+    seed: int,
+    bonferroni_t: bool,
+) -> tuple[Ranking, DetectionRule]:
+    """``scores`` ranked and judged by the detection rule of the null ``design``
+    (``BaselineSpec.null_directions``): ``any`` and ``library-orthogonal`` use the null energies
+    already in ``scores``; ``top-set-orthogonal`` first ranks without a rule, then fits null
+    directions whose first-order output response shares nothing with the top set's candidates'
+    (``null_of(candidates)``: the start model's and the directions' validation energies;
+    :mod:`ornitail.gap.null_response`), so no null direction carries the effect under test."""
+    if design == "any":
+        rule = rule_from_energies(scores.null_start_sse, scores.null_after_sse)
+    elif design == "library-orthogonal":
+        steps = library_matrix_steps(library)
+        rule = rule_from_energies(
+            scores.null_start_sse,
+            scores.null_after_sse,
+            f"the {len(steps)} changes the library's candidates make",
+        )
+    else:
+        top_set = _rank(scores, seed, None, bonferroni_t).top_set
+        members = [candidate for candidate in library if candidate.name in top_set]
+        rule = rule_from_energies(
+            *null_of(members),
+            "the output responses of the top set's candidates on the training runs "
+            f"({', '.join(top_set)})",
+        )
+    return _rank(scores, seed, rule, bonferroni_t), rule
+
+
+def _null_stripped_of(
+    start: LinearFlightModel,
+    effects: Sequence[tuple[Callable[[float], LinearFlightModel], float]],
+    part: _Split,
+    seed: int,
+) -> tuple[float, np.ndarray]:
+    """:func:`null_energies` on one fold's runs, the directions stripped of the first-order output
+    responses of ``effects`` ((family, reach) pairs, :func:`ornitail.gap.null_response.response_gradients`)."""
+    gradients = response_gradients(start, effects, part.training, part.scales)
+    return null_energies(
+        start, part.training, part.validation, part.scales, seed, response_gradients=gradients
+    )
+
+
+def _on_top_of(
+    baseline: LinearFlightModel,
+    first_model: LinearFlightModel,
+    candidate: FlightCandidate,
+    magnitude: float,
+) -> LinearFlightModel:
+    """``candidate`` at ``magnitude`` added to the first effect's model (both changes from ``baseline``)."""
+    return superpose(baseline, first_model, candidate.build(magnitude))
+
+
+def _reach(candidate: FlightCandidate) -> float:
+    """The size of a candidate's largest bound (its magnitude's unit)."""
+    return max(abs(bound) for bound in candidate.bounds)
 
 
 def _library_scores(
@@ -458,13 +529,13 @@ def diagnose_flight(
         record.varying_inputs,
     )
     library = candidates.candidates
-    named_steps = (
-        library_matrix_steps(library) if spec.null_directions == "library-orthogonal" else []
-    )
+    design = spec.null_directions
+    named_steps = library_matrix_steps(library) if design == "library-orthogonal" else []
+    after_ranking = design == "top-set-orthogonal"  # the null waits for the top set
     # every fold fits and scores the library; the first fold's validation runs rank and calibrate
     # the rule, or every fold's pooled (spec.validation, docs/gap-diagnosis.md)
     pooled = spec.validation == "all-folds"
-    fold_scores, fold_models = [], []
+    fold_scores, fold_models, fold_splits = [], [], []
     for fold, part in enumerate(splits, start=1):
         fold_split = split if fold == 1 else _fold(runs, part, baseline, seed)[0]
         scores, models = _library_scores(
@@ -472,15 +543,24 @@ def diagnose_flight(
             baseline,
             baseline,
             fold_split,
-            calibrate=pooled or fold == 1,
+            calibrate=(pooled or fold == 1) and not after_ranking,
             named_steps=named_steps,
         )
         fold_scores.append(scores)
         fold_models.append(models)
+        fold_splits.append(fold_split)
         step(fold, f"fold {fold} of {len(splits)}: library fitted")
     deciding = pool_folds(fold_scores) if pooled else fold_scores[0]
-    rule = rule_from_energies(deciding.null_start_sse, deciding.null_after_sse, named_steps)
-    ranking = _rank(deciding, seed, rule, bonferroni_t=pooled)
+
+    def fold_null(members: Sequence[FlightCandidate]) -> tuple[float, np.ndarray]:
+        effects = [(member.build, _reach(member)) for member in members]
+        energies = [
+            _null_stripped_of(baseline, effects, part, seed)
+            for part in (fold_splits if pooled else fold_splits[:1])
+        ]
+        return sum(start for start, _ in energies), np.sum([after for _, after in energies], axis=0)
+
+    ranking, rule = _ranked_with_rule(deciding, library, design, fold_null, seed, pooled)
     chosen_model = fold_models[0][ranking.entries[0].name]
     first_test = [runs[i] for i in splits[0].test]
     second = None
@@ -488,14 +568,34 @@ def diagnose_flight(
         top = ranking.entries[0]
         first = (next(c for c in library if c.name == top.name), top.magnitude)
         rest = [c for c in library if c.name not in ranking.top_set]
+
+        def second_null(members: Sequence[FlightCandidate]) -> tuple[float, np.ndarray]:
+            first_model = first[0].build(first[1])
+            effects = [
+                (partial(_on_top_of, baseline, first_model, member), _reach(member))
+                for member in members
+            ]
+            return _null_stripped_of(chosen_model, effects, split, seed)
+
         if rest:
             scores, models = _library_scores(
-                rest, chosen_model, baseline, split, first, named_steps=named_steps
+                rest,
+                chosen_model,
+                baseline,
+                split,
+                first,
+                calibrate=not after_ranking,
+                named_steps=named_steps,
             )
-            second_rule = rule_from_energies(
-                scores.null_start_sse, scores.null_after_sse, named_steps
+            second_ranking, second_rule = _ranked_with_rule(
+                scores,
+                library,
+                design,
+                second_null,
+                seed,
+                bonferroni_t=False,
             )
-            second = (_rank(scores, seed, second_rule), models, second_rule)
+            second = (second_ranking, models, second_rule)
     step(len(splits) + 1, "second effect")
     # how far: every run is a test run once, scored with the effect its own fold chose on its own
     # validation runs (never with a choice its test runs took part in) and fitted without it

@@ -11,8 +11,9 @@ effects_off = ["added_mass"]    # simulator effects the baseline leaves out
 # segment_s = 1.0               # linear_model: cut logs into segments of this many seconds
 # derivative_refit = false      # linear_model: skip the re-fit of the model's own derivatives (default: true)
 # validation = "first-fold"     # rank and detect on the first fold's validation runs only (default: all-folds)
-# null_directions = "library-orthogonal"   # flight: null directions stripped of what the library's candidates
-#                                          # change (default: "any"; not yet the default, docs/gap-diagnosis.md)
+# null_directions = "top-set-orthogonal"   # flight: null directions stripped of what the best candidates change
+#                                          # ("library-orthogonal": of what every candidate changes; default "any";
+#                                          # neither is yet the default, docs/gap-diagnosis.md)
 ```
 
 ``tail`` and ``x_h_mm`` are required for the simulator and optional for a model file (they then
@@ -34,11 +35,13 @@ from ornitail.vehicle.geometry import require_tail_position_mm, study_tail_geome
 
 BASELINE_KINDS = ("simulator", "linear_model")
 VALIDATION_DESIGNS = ("first-fold", "all-folds")
-NULL_DIRECTIONS = ("any", "library-orthogonal")
-"""The detection rule's random directions of A and B (flight): any ("any", the default), or stripped of their part
-along the changes the library's candidates make ("library-orthogonal", being evaluated: docs/gap-diagnosis.md)."""
 """Which validation runs rank the candidates and calibrate the detection rule: every fold's pooled
 ("all-folds", the default), or the first fold's alone ("first-fold", the design before: docs/gap-diagnosis.md)."""
+NULL_DIRECTIONS = ("any", "library-orthogonal", "top-set-orthogonal")
+"""The detection rule's random directions of A and B (flight): any ("any", the default), stripped of their part
+along the changes the library's candidates make ("library-orthogonal"), or drawn after the ranking and stripped of
+the top set's candidates' first-order output responses ("top-set-orthogonal"); the last two being evaluated
+(docs/gap-diagnosis.md)."""
 
 
 @dataclass(frozen=True)

@@ -17,9 +17,15 @@ def _diagnosis(
     folder,
     candidates: tuple[str, ...] = (),
     validation: str = "all-folds",
+    null_directions: str = "any",
 ) -> FlightDiagnosis:
     log = write_flight_log_csv(simulate_withheld_log(case), folder / "flight.csv")
-    spec = dataclasses.replace(case.baseline_spec(), candidates=candidates, validation=validation)
+    spec = dataclasses.replace(
+        case.baseline_spec(),
+        candidates=candidates,
+        validation=validation,
+        null_directions=null_directions,
+    )
     spec = read_baseline_spec(write_baseline_spec(spec, folder / "model.toml"))
     return diagnose_flight(spec, [log], seed=5)
 
@@ -152,6 +158,27 @@ def test_input_delay_is_named_and_its_size_recovered(tmp_path):
     # the delay is resolved to a fraction of the 1/64 s step by interpolation; 15 % = 10 ms
     assert report["magnitude"]["value"] == pytest.approx(0.07, rel=0.15)
     assert report["magnitude"]["at_bound"] is None
+
+
+def test_the_top_set_orthogonal_null_is_drawn_after_ranking_against_the_top_sets_responses(
+    tmp_path,
+):
+    case = WithheldCase("AR4", 80.0, {"input_delay": 0.07}, manoeuvres=14, seed=9)
+    candidates = ("input_delay", "input_filter", "pitch_damping", "control_power")
+    report = _diagnosis(
+        case, tmp_path, candidates=candidates, null_directions="top-set-orthogonal"
+    ).report
+    assert report["effect"] == "input_delay"
+    assert report["magnitude"]["value"] == pytest.approx(0.07, rel=0.15)
+    method = report["detection_rule"]["method"]
+    # the null waited for the ranking: its directions are stripped of the responses of the set it judges
+    assert "output responses of the top set's candidates" in method
+    assert f"({', '.join(report['indistinguishable_set'])})" in method
+    second = report["second_effect"]
+    if (
+        second is not None
+    ):  # a second effect is judged by a null stripped of its own top set's responses
+        assert "output responses of the top set's candidates" in second["detection_rule"]["method"]
 
 
 def test_a_drift_beyond_the_candidates_range_is_reported_as_at_least_its_bound(tmp_path):

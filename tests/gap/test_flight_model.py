@@ -1,16 +1,18 @@
 """Simulating the linear flight model on a manoeuvre: zero-order hold, delay, theta drift; the
-detection rule's null directions on synthetic manoeuvres."""
+detection rule's null directions on synthetic manoeuvres, plain and stripped of an effect's response."""
 
 import dataclasses
 
 import numpy as np
 import pytest
 
+from ornitail.gap.detection import random_matrix_directions
 from ornitail.gap.flight_candidates import baseline_flight_model
 from ornitail.gap.flight_data import FlightRun
 from ornitail.gap.flight_diagnosis import null_energies, rule_from_energies
 from ornitail.gap.flight_model import LinearFlightModel, simulate_runs
 from ornitail.gap.model_spec import BaselineSpec
+from ornitail.gap.null_response import response_gradients
 
 
 def _run(elevator: np.ndarray, step: float = 1 / 64, start_s: float = 0.5) -> FlightRun:
@@ -143,3 +145,56 @@ def test_a_segment_delays_its_input_from_the_samples_logged_before_it():
     np.testing.assert_allclose(
         from_history[2:, 0], 0.2 * (np.arange(2, 100) - 1.5) / 64, atol=1e-12
     )
+
+
+def _inertia_family(model: LinearFlightModel):
+    """A pitch-inertia change of fraction k: the q row of A and B divided by 1 + k."""
+
+    def family(k: float) -> LinearFlightModel:
+        a_matrix, b_matrix = model.a_matrix.copy(), model.b_matrix.copy()
+        a_matrix[0] /= 1.0 + k
+        b_matrix[0] /= 1.0 + k
+        return model.with_matrices(a_matrix, b_matrix)
+
+    return family
+
+
+def test_directions_stripped_of_an_effects_response_cannot_absorb_the_effect():
+    """Data with a 30 % pitch-inertia change the baseline lacks: random directions of A and B absorb
+    much of it (some lie near the q row), so the plain null rises with the effect it should judge;
+    directions whose first-order output response is orthogonal to the inertia change's close only
+    the second-order remainder and the noise (without the change they close nothing: 5 % noise)."""
+    baseline = baseline_flight_model(BaselineSpec("simulator", "S3", 98.0))
+    family = _inertia_family(baseline)
+    runs = _doublet_runs(family(0.3), 12, seed=3)
+    scales = np.concatenate([run.outputs for run in runs]).std(axis=0)
+    training, validation = runs[:6], runs[6:9]
+    gradients = response_gradients(baseline, [(family, 1.0)], training, scales)
+    assert not gradients[0][3].any()  # the kinematic row is never a direction's
+    plain = rule_from_energies(
+        *null_energies(baseline, training, validation, scales, seed=4, draws=12)
+    )
+    stripped = rule_from_energies(
+        *null_energies(
+            baseline, training, validation, scales, seed=4, draws=12, response_gradients=gradients
+        )
+    )
+    assert plain.null_quantile > 0.2
+    assert stripped.null_quantile < 0.1
+    # first-order orthogonality: each stripped direction's response has no part along the change's
+    reference = np.concatenate(simulate_runs(baseline, training)) / scales
+    change = (np.concatenate(simulate_runs(family(1e-3), training)) / scales - reference) / 1e-3
+    for a_step, b_step in random_matrix_directions(
+        baseline.a_matrix,
+        baseline.b_matrix,
+        4,
+        seed=4,
+        dynamic_rows=baseline.dynamic_rows,
+        response_gradients=gradients,
+    ):
+        moved = baseline.with_matrices(
+            baseline.a_matrix + 1e-4 * a_step, baseline.b_matrix + 1e-4 * b_step
+        )
+        response = (np.concatenate(simulate_runs(moved, training)) / scales - reference) / 1e-4
+        cosine = np.sum(response * change) / np.sqrt(np.sum(response**2) * np.sum(change**2))
+        assert abs(cosine) < 0.02

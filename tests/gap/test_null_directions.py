@@ -1,4 +1,5 @@
-"""The detection rule's random directions of A and B, and their library-orthogonal variant."""
+"""The detection rule's random directions of A and B, and their library-orthogonal variant (the top-set-orthogonal
+one: tests/gap/test_flight_model.py)."""
 
 from pathlib import Path
 
@@ -6,7 +7,7 @@ import numpy as np
 import pytest
 
 from ornitail.core.errors import UserInputError
-from ornitail.gap.detection import library_orthogonal_basis, random_matrix_directions
+from ornitail.gap.detection import random_matrix_directions, stripped_basis
 from ornitail.gap.model_spec import BaselineSpec, read_baseline_spec, write_baseline_spec
 from ornitail.gap.steady_diagnosis import diagnose_steady
 from ornitail.gap.tunnel_diagnosis import diagnose_tunnel
@@ -61,9 +62,9 @@ def test_the_basis_leaves_at_least_one_free_entry():
         step = np.zeros_like(size)
         step[index] = size[index]
         every_entry.append(step)
-    basis = library_orthogonal_basis(every_entry, size)
+    basis = stripped_basis(every_entry, size)
     assert basis.shape == (active, active - 1)
-    assert library_orthogonal_basis([], size) is None
+    assert stripped_basis([], size) is None
 
 
 def test_the_baseline_file_takes_null_directions_and_refuses_other_values(tmp_path):
