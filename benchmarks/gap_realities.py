@@ -25,7 +25,7 @@ Each rate also gets its 95 % Wilson score interval (``rate_intervals_95``): with
 flights a seed, one false alarm is 0.25 with an interval of 0.05-0.70.
 
 ``python benchmarks/gap_realities.py [--sim-cases 10] [--independent-cases 12] [--seed 2018]
-[--out result.json] [--validation first-fold] [--null-directions top-set-orthogonal]``
+[--out result.json] [--validation first-fold] [--null-directions any]``
 
 ``python benchmarks/gap_realities.py --combine a.json b.json ... [--out pooled.json]`` pools the cases
 of earlier results (each seed's part once: a seed run as two processes, one per part, writes its
@@ -59,6 +59,7 @@ from ornitail.gap.flight_diagnosis import (
     residuals_of,
 )
 from ornitail.gap.model_spec import (
+    FLIGHT_NULL_DIRECTIONS,
     NULL_DIRECTIONS,
     VALIDATION_DESIGNS,
     BaselineSpec,
@@ -351,8 +352,8 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
     parser.add_argument(
         "--null-directions",
         choices=NULL_DIRECTIONS,
-        default="any",
-        help="the baseline files' [baseline].null_directions (other than any: not yet the default)",
+        default=FLIGHT_NULL_DIRECTIONS,
+        help="the baseline files' [baseline].null_directions (default: %(default)s)",
     )
     parser.add_argument(
         "--combine", type=Path, nargs="+", metavar="RESULT", help="pool earlier --out files"

@@ -1,9 +1,11 @@
 """The detection rule: a candidate must beat what a free parameter of no physical meaning reaches.
 
 The rule is calibrated on the data in hand. ``draws`` random one-parameter directions of the
-baseline (flight: a random direction in the linear model's A and B entries; tunnel and steady
-tables: a random combination of the standardised configuration variables per channel) are fitted
-with the candidates' own fitter on the training runs and scored on the validation runs. Their
+baseline (flight: a random direction in the linear model's A and B entries, by default stripped of
+its first-order output response along the top set's candidates, :mod:`ornitail.gap.null_response`;
+tunnel and steady tables: a random combination of the standardised configuration variables per
+channel) are fitted with the candidates' own fitter on the training runs and scored on the
+validation runs. Their
 validation closures are the *null distribution*: what one extra parameter reaches on these runs
 by absorbing noise and whatever systematic error the baseline leaves (its own linearisation, a
 nonlinearity), without naming anything.

@@ -63,7 +63,7 @@ from ornitail.gap.flight_localisation import (
 from ornitail.gap.flight_model import LinearFlightModel, simulate_runs, superpose
 from ornitail.gap.intervals import closure_with_interval
 from ornitail.gap.magnitude_fit import fit_magnitude
-from ornitail.gap.model_spec import BaselineSpec
+from ornitail.gap.model_spec import FLIGHT_NULL_DIRECTIONS, BaselineSpec
 from ornitail.gap.null_response import response_gradients
 from ornitail.gap.pooled_validation import FoldScores, pool_folds
 from ornitail.gap.ranking import CandidateEvidence, Ranking, rank_candidates
@@ -529,7 +529,7 @@ def diagnose_flight(
         record.varying_inputs,
     )
     library = candidates.candidates
-    design = spec.null_directions
+    design = spec.null_directions or FLIGHT_NULL_DIRECTIONS
     named_steps = library_matrix_steps(library) if design == "library-orthogonal" else []
     after_ranking = design == "top-set-orthogonal"  # the null waits for the top set
     # every fold fits and scores the library; the first fold's validation runs rank and calibrate

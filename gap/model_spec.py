@@ -11,9 +11,9 @@ effects_off = ["added_mass"]    # simulator effects the baseline leaves out
 # segment_s = 1.0               # linear_model: cut logs into segments of this many seconds
 # derivative_refit = false      # linear_model: skip the re-fit of the model's own derivatives (default: true)
 # validation = "first-fold"     # rank and detect on the first fold's validation runs only (default: all-folds)
-# null_directions = "top-set-orthogonal"   # flight: null directions stripped of what the best candidates change
-#                                          # ("library-orthogonal": of what every candidate changes; default "any";
-#                                          # neither is yet the default, docs/gap-diagnosis.md)
+# null_directions = "any"        # flight: the detection rule's null directions as drawn (default
+#                                # "top-set-orthogonal": stripped of the best candidates' responses;
+#                                # "library-orthogonal": of every candidate's change; docs/gap-diagnosis.md)
 ```
 
 ``tail`` and ``x_h_mm`` are required for the simulator and optional for a model file (they then
@@ -38,10 +38,12 @@ VALIDATION_DESIGNS = ("first-fold", "all-folds")
 """Which validation runs rank the candidates and calibrate the detection rule: every fold's pooled
 ("all-folds", the default), or the first fold's alone ("first-fold", the design before: docs/gap-diagnosis.md)."""
 NULL_DIRECTIONS = ("any", "library-orthogonal", "top-set-orthogonal")
-"""The detection rule's random directions of A and B (flight): any ("any", the default), stripped of their part
-along the changes the library's candidates make ("library-orthogonal"), or drawn after the ranking and stripped of
-the top set's candidates' first-order output responses ("top-set-orthogonal"); the last two being evaluated
-(docs/gap-diagnosis.md)."""
+"""The detection rule's random directions of A and B (flight): as drawn ("any", the default until stop 37),
+stripped of their part along the changes the library's candidates make ("library-orthogonal"), or drawn after the
+ranking and stripped of the top set's candidates' first-order output responses ("top-set-orthogonal", the default:
+docs/gap-diagnosis.md)."""
+FLIGHT_NULL_DIRECTIONS = "top-set-orthogonal"
+"""The flight diagnosis' null directions when the baseline file names none."""
 
 
 @dataclass(frozen=True)
@@ -59,7 +61,9 @@ class BaselineSpec:
     # re-fit the model's derivatives too; None: yes for a linear_model
     derivative_refit: bool | None = None
     validation: str = "all-folds"  # one of VALIDATION_DESIGNS
-    null_directions: str = "any"  # one of NULL_DIRECTIONS
+    null_directions: str | None = (
+        None  # one of NULL_DIRECTIONS; None: FLIGHT_NULL_DIRECTIONS (flight)
+    )
 
     def __post_init__(self) -> None:
         if self.derivative_refit is None:
@@ -67,9 +71,9 @@ class BaselineSpec:
 
 
 def require_flight_null_directions(spec: BaselineSpec, data: str) -> None:
-    """Refuse ``null_directions`` other than "any" for ``data`` (tunnel or steady-state tables), whose null is drawn
-    from the configuration variables, not from a flight model's A and B."""
-    if spec.null_directions != "any":
+    """Refuse a ``null_directions`` other than "any" for ``data`` (tunnel or steady-state tables), whose null is
+    drawn from the configuration variables, not from a flight model's A and B."""
+    if spec.null_directions not in (None, "any"):
         raise UserInputError(
             f"{spec.source}: [baseline].null_directions",
             f"{spec.null_directions!r} is only for flight logs; {data} draw their null from the configuration "
@@ -127,7 +131,7 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
     segment_s = table.number("segment_s", None, positive=True)
     refit = table.boolean("derivative_refit", None)
     validation = table.text("validation", "all-folds", choices=VALIDATION_DESIGNS)
-    null_directions = table.text("null_directions", "any", choices=NULL_DIRECTIONS)
+    null_directions = table.text("null_directions", None, choices=NULL_DIRECTIONS)
     for key, given in (("segment_s", segment_s is not None), ("derivative_refit", bool(refit))):
         if given and kind != "linear_model":
             raise UserInputError(table.where(key), "only for kind = linear_model (a model file)")
@@ -167,7 +171,7 @@ def write_baseline_spec(spec: BaselineSpec, path: str | Path) -> Path:
         lines.append("derivative_refit = false")
     if spec.validation != "all-folds":
         lines.append(f'validation = "{spec.validation}"')
-    if spec.null_directions != "any":
+    if spec.null_directions is not None:
         lines.append(f'null_directions = "{spec.null_directions}"')
     if spec.model:
         lines.append(f'model = "{spec.model}"')

@@ -17,7 +17,7 @@ def _diagnosis(
     folder,
     candidates: tuple[str, ...] = (),
     validation: str = "all-folds",
-    null_directions: str = "any",
+    null_directions: str | None = None,
 ) -> FlightDiagnosis:
     log = write_flight_log_csv(simulate_withheld_log(case), folder / "flight.csv")
     spec = dataclasses.replace(

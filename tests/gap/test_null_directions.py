@@ -8,7 +8,14 @@ import pytest
 
 from ornitail.core.errors import UserInputError
 from ornitail.gap.detection import random_matrix_directions, stripped_basis
-from ornitail.gap.model_spec import BaselineSpec, read_baseline_spec, write_baseline_spec
+from ornitail.gap.model_spec import (
+    FLIGHT_NULL_DIRECTIONS,
+    NULL_DIRECTIONS,
+    BaselineSpec,
+    read_baseline_spec,
+    require_flight_null_directions,
+    write_baseline_spec,
+)
 from ornitail.gap.steady_diagnosis import diagnose_steady
 from ornitail.gap.tunnel_diagnosis import diagnose_tunnel
 
@@ -74,6 +81,14 @@ def test_the_baseline_file_takes_null_directions_and_refuses_other_values(tmp_pa
     assert read_baseline_spec(write_baseline_spec(spec, tmp_path / "b.toml")).null_directions == (
         "library-orthogonal"
     )
+    # without the key the flight diagnosis' default applies, and the file written back leaves it out
+    plain = read_baseline_spec(
+        write_baseline_spec(BaselineSpec("simulator", "S3", 98.0), tmp_path / "p.toml")
+    )
+    assert plain.null_directions is None
+    assert "null_directions" not in (tmp_path / "p.toml").read_text()
+    assert FLIGHT_NULL_DIRECTIONS in NULL_DIRECTIONS
+    require_flight_null_directions(plain, "tunnel tables")  # the default is no refusal for tables
     bad = tmp_path / "bad.toml"
     bad.write_text(
         '[baseline]\nkind = "simulator"\ntail = "S3"\nx_h_mm = 98\nnull_directions = "orthogonal"\n'
