@@ -116,6 +116,13 @@ def _derivative_level_lines(report: dict[str, Any]) -> list[str]:
     ]
 
 
+def _stripped_of(rule: dict) -> str:
+    """ ", each orthogonal to ..." when the rule's null directions were stripped of named changes (its method says
+    what of), else nothing."""
+    _, marker, what = rule["method"].partition(", each orthogonal to ")
+    return f"{marker}{what}" if marker else ""
+
+
 def render_report(report: dict[str, Any]) -> str:
     """Readable summary: verdict, where, ranking, how far the gap shrinks, the sparse pointer."""
     runs = report["runs"]
@@ -132,7 +139,8 @@ def render_report(report: dict[str, Any]) -> str:
         f"{runs['test']} scored as test runs; seed {report['seed']})",
         f"split: {report['split']['method']}",
         f"detection rule: validation closure above {rule['threshold']:.3f}, the 95th percentile of "
-        f"{rule['draws']} random one-parameter directions fitted the same way, and its lower bound "
+        f"{rule['draws']} random one-parameter directions fitted the same way{_stripped_of(rule)}, "
+        "and its lower bound "
         f"({'Bonferroni-t' if pooled else 'bootstrap'}, simultaneous over the candidates that "
         "could have won) above "
         f"{rule['lower_bound_threshold']:.3f}, the larger of their median "

@@ -174,6 +174,10 @@ def test_the_top_set_orthogonal_null_is_drawn_after_ranking_against_the_top_sets
     # the null waited for the ranking: its directions are stripped of the responses of the set it judges
     assert "output responses of the top set's candidates" in method
     assert f"({', '.join(report['indistinguishable_set'])})" in method
+    assert (
+        "directions fitted the same way, each orthogonal to the output responses"
+        in render_report(report)
+    )
     second = report["second_effect"]
     if (
         second is not None
