@@ -5,10 +5,9 @@ baseline (flight: a random direction in the linear model's A and B entries, by d
 its first-order output response along the top set's candidates, :mod:`ornitail.gap.null_response`;
 tunnel and steady tables: a random combination of the standardised configuration variables per
 channel) are fitted with the candidates' own fitter on the training runs and scored on the
-validation runs. Their
-validation closures are the *null distribution*: what one extra parameter reaches on these runs
-by absorbing noise and whatever systematic error the baseline leaves (its own linearisation, a
-nonlinearity), without naming anything.
+validation runs. Their validation closures are the *null distribution*: what one extra parameter
+reaches on these runs by absorbing noise and whatever systematic error the baseline leaves (its own
+linearisation, a nonlinearity), without naming anything.
 
 A candidate is named (detected) when its validation closure exceeds the null's 95th percentile and
 its lower bound (resampling validation runs, simultaneous over the candidates that could have won:
