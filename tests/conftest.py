@@ -7,10 +7,11 @@ timeout lands inside a Qt slot (where PySide swallows it) would hang CI until it
 watchdog thread needs no GIL: past ``HARD_DEADLINE_S`` it writes every thread's stack to the report and ends
 the process with exit status 1. The same watchdog covers interpreter shutdown (threads joined at exit).
 
-`ornitail demo` (tests/test_demo.py) spends about two minutes mostly waiting on its simulated rig (the fan spinning
-up and down around 27 wind-off tares; a quarter of one core). When the session holds the demo's test, the demo is
-started as its own process when collection ends and its test runs last, reading what it printed. The demo retakes
-a record that lost samples, so a busy neighbour cannot change its results, only its duration.
+`ornitail demo` (tests/test_demo.py) spends about two minutes recording on its simulated rig (the fan spinning up
+and down around 27 wind-off tares; about 0.7 of one core, measured beside the rig tests at stop 37). When the
+session holds the demo's test, the demo is started as its own process when collection ends and its test runs
+last, reading what it printed. The demo retakes a record that lost samples, so a busy neighbour cannot change its
+results, only its duration.
 
 The whole suite (``bash scripts/test.sh`` without arguments) runs in two pytest sessions chosen by
 ``--ornitail-phase``, at once: ``rig`` (the tests that drive a simulated rig, one at a time in one process, the
