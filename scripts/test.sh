@@ -3,7 +3,8 @@
 #
 # With no arguments, the whole suite in two pytest sessions at once (tests/conftest.py, --ornitail-phase):
 #   - the tests that drive a simulated rig, one at a time in one process at normal priority (the sweep tests count
-#     samples exactly), while `ornitail demo` records in the background; the demo's test last, reading what it printed;
+#     samples exactly), the demo's test first: it waits for `ornitail demo`, recording in the background, so no
+#     other rig streams beside the demo's;
 #   - beside them, the tests that drive no simulated rig on two pytest-xdist workers in the idle scheduling class
 #     (SCHED_IDLE, `chrt --idle`; `nice -n 19` where that is refused): they take only the CPU time the rig tests and
 #     the demo leave, so those run as on a quiet host. Their report is printed when both sessions have ended.

@@ -8,17 +8,18 @@ watchdog thread needs no GIL: past ``HARD_DEADLINE_S`` it writes every thread's 
 the process with exit status 1. The same watchdog covers interpreter shutdown (threads joined at exit).
 
 `ornitail demo` (tests/test_demo.py) spends about two minutes recording on its simulated rig (the fan spinning up
-and down around 27 wind-off tares; about 0.7 of one core, measured beside the rig tests at stop 37). When the
-session holds the demo's test, the demo is started as its own process when collection ends and its test runs
-last, reading what it printed. The demo retakes a record that lost samples, so a busy neighbour cannot change its
-results, only its duration.
+and down around 27 wind-off tares; about 0.7 of one core, measured at stop 37). When the
+session holds the demo's test, the demo is started as its own process when collection ends; its test reads what
+it printed, and among the rig tests it runs first, so that no other rig streams beside the demo's (a test rig
+beside it timed out writing to its strut's pty once in a clean-clone run at stop 37). The demo retakes a record
+that lost samples, so a busy neighbour cannot change its results, only its duration.
 
 The whole suite (``bash scripts/test.sh`` without arguments) runs in two pytest sessions chosen by
 ``--ornitail-phase``, at once: ``rig`` (the tests that drive a simulated rig, one at a time in one process, the
-demo's test last) at normal priority, and ``no-rig`` (the simulator, flight, design, gap, calibration, balance
+demo's test first) at normal priority, and ``no-rig`` (the simulator, flight, design, gap, calibration, balance
 processing of simulated signals, the bad-input corpus) on two xdist workers in the idle scheduling class, so that
-they take only the CPU time the rig tests and the demo leave: at most one test rig streams at a time beside the
-demo's, each on a host that is quiet for it (the sweep tests count samples exactly). The script starts the demo
+they take only the CPU time the rig tests and the demo leave: one rig streams at a time, on a host that is quiet
+for it (the sweep tests count samples exactly). The script starts the demo
 itself and names its folder in ``ORNITAIL_TEST_DEMO_FOLDER`` (``stdout``, ``stderr`` and, when it has ended,
 ``returncode``); the demo's test reads it there instead of starting one.
 """
@@ -153,8 +154,8 @@ def _is_the_demo(item: pytest.Item) -> bool:
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Only the phase's tests; those that drive no simulated rig first, in their usual order otherwise; the
-    demo's test last (the demo records meanwhile)."""
+    """Only the phase's tests; the demo's test first (no rig streams beside the demo's), then those that drive
+    no simulated rig, in their usual order otherwise."""
     phase = config.getoption("--ornitail-phase")
     if phase != "all":
         wanted = phase == "rig"
@@ -162,7 +163,7 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
         if deselected:
             config.hook.pytest_deselected(items=deselected)
             items[:] = [item for item in items if _drives_a_rig(item) == wanted]
-    items.sort(key=lambda item: (_is_the_demo(item), _drives_a_rig(item)))
+    items.sort(key=lambda item: (not _is_the_demo(item), _drives_a_rig(item)))
 
 
 def pytest_collection_finish(session: pytest.Session) -> None:
