@@ -1,13 +1,12 @@
 #!/usr/bin/env bash
 # Set up (if needed) and run the test suite, offscreen.
 #
-# With no arguments, the whole suite in two pytest sessions at once (tests/conftest.py, --ornitail-phase):
-#   - the tests that drive a simulated rig, one at a time in one process at normal priority (the sweep tests count
-#     samples exactly), the demo's test first: it waits for `ornitail demo`, recording in the background, so no
-#     other rig streams beside the demo's;
-#   - beside them, the tests that drive no simulated rig on two pytest-xdist workers in the idle scheduling class
-#     (SCHED_IDLE, `chrt --idle`; `nice -n 19` where that is refused): they take only the CPU time the rig tests and
-#     the demo leave, so those run as on a quiet host. Their report is printed when both sessions have ended.
+# With no arguments, the whole suite in two phases (tests/conftest.py, --ornitail-phase):
+#   1. the tests that drive no simulated rig, on two pytest-xdist workers (one per core), while `ornitail demo`
+#      records in the background (it mostly waits on its simulated rig);
+#   2. the tests that drive a simulated rig, one at a time in one process (the sweep tests count samples exactly
+#      and are kept off a loaded host), the demo's test first: it reads what the demo printed, so no rig streams
+#      beside the demo's.
 # With arguments, pytest with those arguments (one process).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
@@ -33,33 +32,16 @@ demo_folder="$(mktemp -d -t ornitail-demo-XXXXXX)"
 demo_job=$!
 cleanup() {
   kill "$demo_job" 2>/dev/null || true
-  pkill -f -- "--basetemp=$demo_folder/no-rig" 2>/dev/null || true
   pkill -f -- "--data-root $demo_folder/data" 2>/dev/null || true
   rm -rf "$demo_folder"
 }
 trap cleanup EXIT
 export ORNITAIL_TEST_DEMO_FOLDER="$demo_folder"
 
-# The idle class where the kernel allows it, else the lowest nice level.
-idle_priority=(chrt --idle 0)
-if ! chrt --idle 0 true 2>/dev/null; then
-  idle_priority=(nice -n 19)
-fi
-no_rig_log="$demo_folder/no-rig.log"
-(
-  status=0
-  "${idle_priority[@]}" .venv/bin/python -m pytest --ornitail-phase=no-rig -n 2 --dist loadfile -p no:cacheprovider \
-    --basetemp="$demo_folder/no-rig" >"$no_rig_log" 2>&1 || status=$?
-  echo "$status" >"$demo_folder/no-rig-returncode"
-) &
-no_rig_job=$!
+no_rig_status=0
+.venv/bin/python -m pytest --ornitail-phase=no-rig -n 2 --dist loadfile || no_rig_status=$?
 rig_status=0
 .venv/bin/python -m pytest --ornitail-phase=rig || rig_status=$?
-wait "$no_rig_job" || true
-echo
-echo "=== the tests that drive no simulated rig (run beside the ones above) ==="
-cat "$no_rig_log"
-no_rig_status="$(cat "$demo_folder/no-rig-returncode" 2>/dev/null || echo 1)"
 if [ "$no_rig_status" -ne 0 ]; then
   exit "$no_rig_status"
 fi

@@ -1,5 +1,5 @@
 """A hard deadline for every test and for the end of the session: a hang fails fast, with every thread's stack;
-and the README's demo run in the background while the other tests run.
+and the README's demo run in the background while the tests that do not drive a simulated rig run.
 
 pytest-timeout (``timeout`` in pyproject.toml, signal method) fails a test that runs too long, but only when the
 main thread gets back to Python bytecode: a test stuck in native code (a Qt call, a lock taken in C) or whose
@@ -7,21 +7,19 @@ timeout lands inside a Qt slot (where PySide swallows it) would hang CI until it
 watchdog thread needs no GIL: past ``HARD_DEADLINE_S`` it writes every thread's stack to the report and ends
 the process with exit status 1. The same watchdog covers interpreter shutdown (threads joined at exit).
 
-`ornitail demo` (tests/test_demo.py) spends about two minutes recording on its simulated rig (the fan spinning up
-and down around 27 wind-off tares; about 0.7 of one core, measured at stop 37). When the
-session holds the demo's test, the demo is started as its own process when collection ends; its test reads what
-it printed, and among the rig tests it runs first, so that no other rig streams beside the demo's (a test rig
-beside it timed out writing to its strut's pty once in a clean-clone run at stop 37). The demo retakes a record
-that lost samples, so a busy neighbour cannot change its results, only its duration.
+`ornitail demo` (tests/test_demo.py) spends about two minutes mostly waiting on its simulated rig (the fan spinning
+up and down around 27 wind-off tares; a quarter of one core). When the session holds the demo's test, the demo is
+started as its own process when collection ends, and the tests that drive no simulated rig (simulator, flight,
+design, gap, calibration, balance processing of simulated signals, the bad-input corpus) run first, while it
+records; the demo's test then only reads what it printed. Tests that drive a simulated rig run after those, so at
+most one rig streams at a time (the sweep tests count samples exactly and are kept off a loaded link). The demo
+retakes a record that lost samples, so a busy
+neighbour cannot change its results, only its duration.
 
 The whole suite (``bash scripts/test.sh`` without arguments) runs in two pytest sessions chosen by
-``--ornitail-phase``, at once: ``rig`` (the tests that drive a simulated rig, one at a time in one process, the
-demo's test first) at normal priority, and ``no-rig`` (the simulator, flight, design, gap, calibration, balance
-processing of simulated signals, the bad-input corpus) on two xdist workers in the idle scheduling class, so that
-they take only the CPU time the rig tests and the demo leave: one rig streams at a time, on a host that is quiet
-for it (the sweep tests count samples exactly). The script starts the demo
-itself and names its folder in ``ORNITAIL_TEST_DEMO_FOLDER`` (``stdout``, ``stderr`` and, when it has ended,
-``returncode``); the demo's test reads it there instead of starting one.
+``--ornitail-phase``: ``no-rig`` (on two xdist workers) and then ``rig`` (one process, the demo's test first). The
+script starts the demo itself and names its folder in ``ORNITAIL_TEST_DEMO_FOLDER`` (``stdout``, ``stderr`` and,
+when it has ended, ``returncode``); the demo's test reads it there instead of starting one.
 """
 
 from __future__ import annotations
@@ -154,8 +152,8 @@ def _is_the_demo(item: pytest.Item) -> bool:
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Only the phase's tests; the demo's test first (no rig streams beside the demo's), then those that drive
-    no simulated rig, in their usual order otherwise."""
+    """Only the phase's tests; those that drive no simulated rig first (the demo records meanwhile), in their
+    usual order otherwise; in the rig phase the demo's test first (no rig streams beside the demo's)."""
     phase = config.getoption("--ornitail-phase")
     if phase != "all":
         wanted = phase == "rig"
@@ -163,7 +161,10 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
         if deselected:
             config.hook.pytest_deselected(items=deselected)
             items[:] = [item for item in items if _drives_a_rig(item) == wanted]
-    items.sort(key=lambda item: (not _is_the_demo(item), _drives_a_rig(item)))
+    if phase == "rig":
+        items.sort(key=lambda item: not _is_the_demo(item))
+    else:
+        items.sort(key=_drives_a_rig)
 
 
 def pytest_collection_finish(session: pytest.Session) -> None:
