@@ -280,24 +280,25 @@ def _ranked_with_rule(
     scores: FoldScores,
     library: Sequence[FlightCandidate],
     design: str,
+    named_steps: Sequence[np.ndarray],
     null_of: Callable[[Sequence[FlightCandidate]], tuple[float, np.ndarray]],
     seed: int,
     bonferroni_t: bool,
 ) -> tuple[Ranking, DetectionRule]:
     """``scores`` ranked and judged by the detection rule of the null ``design``
     (``BaselineSpec.null_directions``): ``any`` and ``library-orthogonal`` use the null energies
-    already in ``scores``; ``top-set-orthogonal`` first ranks without a rule, then fits null
+    already in ``scores`` (the latter's directions stripped of ``named_steps``,
+    :func:`library_matrix_steps`); ``top-set-orthogonal`` first ranks without a rule, then fits null
     directions whose first-order output response shares nothing with the top set's candidates'
     (``null_of(candidates)``: the start model's and the directions' validation energies;
     :mod:`ornitail.gap.null_response`), so no null direction carries the effect under test."""
     if design == "any":
         rule = rule_from_energies(scores.null_start_sse, scores.null_after_sse)
     elif design == "library-orthogonal":
-        steps = library_matrix_steps(library)
         rule = rule_from_energies(
             scores.null_start_sse,
             scores.null_after_sse,
-            f"the {len(steps)} changes the library's candidates make",
+            f"the {len(named_steps)} changes the library's candidates make",
         )
     else:
         top_set = _rank(scores, seed, None, bonferroni_t).top_set
@@ -560,7 +561,9 @@ def diagnose_flight(
         ]
         return sum(start for start, _ in energies), np.sum([after for _, after in energies], axis=0)
 
-    ranking, rule = _ranked_with_rule(deciding, library, design, fold_null, seed, pooled)
+    ranking, rule = _ranked_with_rule(
+        deciding, library, design, named_steps, fold_null, seed, pooled
+    )
     chosen_model = fold_models[0][ranking.entries[0].name]
     first_test = [runs[i] for i in splits[0].test]
     second = None
@@ -591,6 +594,7 @@ def diagnose_flight(
                 scores,
                 library,
                 design,
+                named_steps,
                 second_null,
                 seed,
                 bonferroni_t=False,
