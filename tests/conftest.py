@@ -7,19 +7,24 @@ timeout lands inside a Qt slot (where PySide swallows it) would hang CI until it
 watchdog thread needs no GIL: past ``HARD_DEADLINE_S`` it writes every thread's stack to the report and ends
 the process with exit status 1. The same watchdog covers interpreter shutdown (threads joined at exit).
 
-`ornitail demo` (tests/test_demo.py) spends about two minutes mostly waiting on its simulated rig (the fan spinning
-up and down around 27 wind-off tares; a quarter of one core). When the session holds the demo's test, the demo is
-started as its own process when collection ends, and the tests that drive no simulated rig (simulator, flight,
-design, gap, calibration, balance processing of simulated signals, the bad-input corpus) run first, while it
-records; the demo's test then only reads what it printed. Tests that drive a simulated rig run after those, so at
-most one rig streams at a time (the sweep tests count samples exactly and are kept off a loaded link). The demo
-retakes a record that lost samples, so a busy
-neighbour cannot change its results, only its duration.
+`ornitail demo` (tests/test_demo.py) spends about two minutes on its simulated rig (the fan spinning up and down around
+27 wind-off tares; it takes about 0.7 of one core, measured beside the rig tests at stop 37). When the session holds the
+demo's test, the demo is started as its own process when collection ends, and the tests that drive no simulated rig
+(simulator, flight, design, gap, calibration, balance processing of simulated signals, the bad-input corpus) run first,
+while it records; the demo's test then only reads what it printed. Tests that drive a simulated rig run after those, so
+at most one rig streams at a time (the sweep tests count samples exactly and are kept off a loaded link). The demo
+retakes a record that lost samples, so a busy neighbour cannot change its results, only its duration.
 
 The whole suite (``bash scripts/test.sh`` without arguments) runs in two pytest sessions chosen by
 ``--ornitail-phase``: ``no-rig`` (on two xdist workers) and then ``rig`` (one process, the demo's test first). The
 script starts the demo itself and names its folder in ``ORNITAIL_TEST_DEMO_FOLDER`` (``stdout``, ``stderr`` and,
 when it has ended, ``returncode``); the demo's test reads it there instead of starting one.
+
+The two phases in sequence take 13-16 minutes. Running them at once (the rig-free workers in the idle scheduling
+class) was tried at stops 37 and 38 and failed in clean clones each time: an alignment estimate of 1.48 s, a strut's
+pty write timing out, and (stop 38, with the timing comparisons moved to a quiet phase of their own) a sweep resumed
+after ``kill -9`` exiting 3. The rig tests then took 479 s beside the workers, against about 450 s alone: the rig
+phase is the long pole either way.
 """
 
 from __future__ import annotations
