@@ -61,9 +61,8 @@ class BaselineSpec:
     # re-fit the model's derivatives too; None: yes for a linear_model
     derivative_refit: bool | None = None
     validation: str = "all-folds"  # one of VALIDATION_DESIGNS
-    null_directions: str | None = (
-        None  # one of NULL_DIRECTIONS; None: FLIGHT_NULL_DIRECTIONS (flight)
-    )
+    # one of NULL_DIRECTIONS; None: FLIGHT_NULL_DIRECTIONS (flight)
+    null_directions: str | None = None
 
     def __post_init__(self) -> None:
         if self.derivative_refit is None:

@@ -20,10 +20,10 @@ The whole suite (``bash scripts/test.sh`` without arguments) runs in two pytest 
 script starts the demo itself and names its folder in ``ORNITAIL_TEST_DEMO_FOLDER`` (``stdout``, ``stderr`` and,
 when it has ended, ``returncode``); the demo's test reads it there instead of starting one.
 
-The two phases in sequence take 13-16 minutes. Running them at once (the rig-free workers in the idle scheduling
+The two phases in sequence take 13-17 minutes. Running them at once (the rig-free workers in the idle scheduling
 class) was tried at stops 37 and 38 and failed in clean clones each time: an alignment estimate of 1.48 s, a strut's
 pty write timing out, and (stop 38, with the timing comparisons moved to a quiet phase of their own) a sweep resumed
-after ``kill -9`` exiting 3. The rig tests but the timing comparisons then took 479 s beside the workers and the
+after ``kill -9`` exiting 3. The rig tests other than the timing comparisons then took 479 s beside the workers and the
 demo, against about 365 s alone: with the comparisons' 85 s after them, no faster than ten minutes either.
 """
 
