@@ -42,10 +42,12 @@ MATERIAL_CLOSURE = 0.10
 
 @dataclass(frozen=True)
 class DetectionRule:
-    """The null distribution: validation closures of ``len(closures)`` random directions."""
+    """The null distribution: validation closures of ``len(closures)`` random directions;
+    ``orthogonal_to`` names the changes the directions were stripped of (empty: none)."""
 
     method: str
     closures: np.ndarray
+    orthogonal_to: str = ""
 
     @property
     def null_quantile(self) -> float:
@@ -76,6 +78,7 @@ class DetectionRule:
         """The report's ``detection_rule`` field."""
         return {
             "method": self.method,
+            "null_directions_orthogonal_to": self.orthogonal_to or None,
             "threshold": self.threshold,
             "lower_bound_threshold": self.lower_bound_threshold,
             "null_closures_quantile_95": self.null_quantile,

@@ -273,7 +273,8 @@ def rule_from_energies(
     method = NULL_METHOD.format(draws=len(after_sse))
     if orthogonal_to:
         method += f", each orthogonal to {orthogonal_to}"
-    return DetectionRule(method, np.array([closure_of(start_sse, after) for after in after_sse]))
+    closures = np.array([closure_of(start_sse, after) for after in after_sse])
+    return DetectionRule(method, closures, orthogonal_to)
 
 
 def _ranked_with_rule(

@@ -117,10 +117,9 @@ def _derivative_level_lines(report: dict[str, Any]) -> list[str]:
 
 
 def _stripped_of(rule: dict) -> str:
-    """ ", each orthogonal to ..." when the rule's null directions were stripped of named changes (its method says
-    what of), else nothing."""
-    _, marker, what = rule["method"].partition(", each orthogonal to ")
-    return f"{marker}{what}" if marker else ""
+    """ ", each orthogonal to ..." when the rule's null directions were stripped of named changes, else nothing."""
+    what = rule.get("null_directions_orthogonal_to")
+    return f", each orthogonal to {what}" if what else ""
 
 
 def render_report(report: dict[str, Any]) -> str:

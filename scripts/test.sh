@@ -4,9 +4,10 @@
 # With no arguments, the whole suite in two phases (tests/conftest.py, --ornitail-phase):
 #   1. the tests that drive no simulated rig, on two pytest-xdist workers (one per core), while `ornitail demo`
 #      records in the background (it mostly waits on its simulated rig);
-#   2. the tests that drive a simulated rig, one at a time in one process (the sweep tests count samples exactly
-#      and are kept off a loaded host), the demo's test first: it reads what the demo printed, so no rig streams
-#      beside the demo's.
+#   2. once the demo has ended, the tests that drive a simulated rig, on two workers as well: they mostly wait on
+#      their rigs' simulated time (each worker about 0.6 of a core), so two rigs stream at once and nothing else
+#      does (the sweep tests count samples exactly and are kept off a CPU-bound neighbour); the demo's test only
+#      reads what the demo printed.
 # With arguments, pytest with those arguments (one process).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
@@ -40,8 +41,13 @@ export ORNITAIL_TEST_DEMO_FOLDER="$demo_folder"
 
 no_rig_status=0
 .venv/bin/python -m pytest --ornitail-phase=no-rig -n 2 --dist loadfile || no_rig_status=$?
+# A deadline, not a synchronisation: the demo's test reports a demo that has not ended by then, with its log.
+for _ in $(seq 1200); do
+  [ -s "$demo_folder/returncode" ] && break
+  sleep 0.5
+done
 rig_status=0
-.venv/bin/python -m pytest --ornitail-phase=rig || rig_status=$?
+.venv/bin/python -m pytest --ornitail-phase=rig -n 2 --dist loadfile || rig_status=$?
 if [ "$no_rig_status" -ne 0 ]; then
   exit "$no_rig_status"
 fi

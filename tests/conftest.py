@@ -9,22 +9,23 @@ the process with exit status 1. The same watchdog covers interpreter shutdown (t
 
 `ornitail demo` (tests/test_demo.py) spends about two minutes on its simulated rig (the fan spinning up and down around
 27 wind-off tares; it takes about 0.7 of one core, measured beside the rig tests at stop 37). When the session holds the
-demo's test, the demo is started as its own process when collection ends, and the tests that drive no simulated rig
-(simulator, flight, design, gap, calibration, balance processing of simulated signals, the bad-input corpus) run first,
-while it records; the demo's test then only reads what it printed. Tests that drive a simulated rig run after those, so
-at most one rig streams at a time (the sweep tests count samples exactly and are kept off a loaded link). The demo
-retakes a record that lost samples, so a busy neighbour cannot change its results, only its duration.
+demo's test, the demo is started as its own process when collection ends (under pytest-xdist, by the worker that runs
+its test, when it does), and the tests that drive no simulated rig (simulator, flight, design, gap, calibration,
+balance processing of simulated signals, the bad-input corpus) run first, while it records; the demo's test then only
+reads what it printed. The demo retakes a record that lost samples, so a busy neighbour cannot change its results,
+only its duration.
 
 The whole suite (``bash scripts/test.sh`` without arguments) runs in two pytest sessions chosen by
-``--ornitail-phase``: ``no-rig`` (on two xdist workers) and then ``rig`` (one process, the demo's test first). The
-script starts the demo itself and names its folder in ``ORNITAIL_TEST_DEMO_FOLDER`` (``stdout``, ``stderr`` and,
+``--ornitail-phase``, each on two xdist workers: ``no-rig`` beside the demo, then, once the demo has ended, ``rig``.
+The script starts the demo itself and names its folder in ``ORNITAIL_TEST_DEMO_FOLDER`` (``stdout``, ``stderr`` and,
 when it has ended, ``returncode``); the demo's test reads it there instead of starting one.
 
-The two phases in sequence take 13-17 minutes. Running them at once (the rig-free workers in the idle scheduling
-class) was tried at stops 37 and 38 and failed in clean clones each time: an alignment estimate of 1.48 s, a strut's
-pty write timing out, and (stop 38, with the timing comparisons moved to a quiet phase of their own) a sweep resumed
-after ``kill -9`` exiting 3. The rig tests other than the timing comparisons then took 479 s beside the workers and the
-demo, against about 365 s alone: with the comparisons' 85 s after them, no faster than ten minutes either.
+Why two rigs at once but no rig beside the rig-free tests. The rig tests mostly wait on their rigs' simulated time:
+one process of them took 457 s of wall time and about 280 s of CPU time (stop 39), and two of them finish in 245 s,
+each test as long as alone. The rig-free tests are CPU-bound (about 415 s of CPU time on two workers). Running the
+rig tests beside those (the rig-free workers in the idle scheduling class) was tried at stops 37 and 38 and failed in
+clean clones: an alignment estimate of 1.48 s, a strut's pty write timing out, and a sweep resumed after ``kill -9``
+exiting 3. Until stop 38 the rig tests ran one at a time, and the suite took 13-17 minutes.
 """
 
 from __future__ import annotations
@@ -63,6 +64,8 @@ RIG_FIXTURES = {"simulated_rig", "simulated_daq", "simulated_netcanoem", "simula
 PHASES = ("all", "no-rig", "rig")
 """``--ornitail-phase``: every test, those that drive no simulated rig, or those that do."""
 EXTERNAL_DEMO_VARIABLE = "ORNITAIL_TEST_DEMO_FOLDER"
+XDIST_WORKER_VARIABLE = "PYTEST_XDIST_WORKER"
+"""Set by pytest-xdist in each of its worker processes."""
 EXTERNAL_DEMO_POLL_S = 0.5
 """How often the demo's test looks for the externally started demo's return code, s (a deadline wait)."""
 
@@ -158,7 +161,7 @@ def _is_the_demo(item: pytest.Item) -> bool:
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """Only the phase's tests; those that drive no simulated rig first (the demo records meanwhile), in their
-    usual order otherwise; in the rig phase the demo's test first (no rig streams beside the demo's)."""
+    usual order otherwise; in the rig phase the demo's test first (it waits for the demo to end)."""
     phase = config.getoption("--ornitail-phase")
     if phase != "all":
         wanted = phase == "rig"
@@ -177,13 +180,19 @@ def pytest_collection_finish(session: pytest.Session) -> None:
     if session.config.option.collectonly or not any(_is_the_demo(i) for i in session.items):
         return
     external = os.environ.get(EXTERNAL_DEMO_VARIABLE)
-    _background_demo = ExternalDemo(Path(external)) if external else BackgroundDemo()
+    if external:
+        _background_demo = ExternalDemo(Path(external))
+    elif XDIST_WORKER_VARIABLE not in os.environ:
+        _background_demo = BackgroundDemo()
+    # else: every xdist worker collects the demo's test; the one that runs it starts the demo (the fixture)
 
 
 @pytest.fixture(scope="session")
 def background_demo() -> BackgroundDemo | ExternalDemo:
-    """The demo started when collection ended (see the module notes)."""
-    assert _background_demo is not None, "the demo starts only when its test file is collected"
+    """The demo started when collection ended, or now in an xdist worker (see the module notes)."""
+    global _background_demo
+    if _background_demo is None:
+        _background_demo = BackgroundDemo()
     return _background_demo
 
 

@@ -170,10 +170,12 @@ def test_the_top_set_orthogonal_null_is_drawn_after_ranking_against_the_top_sets
     ).report
     assert report["effect"] == "input_delay"
     assert report["magnitude"]["value"] == pytest.approx(0.07, rel=0.15)
-    method = report["detection_rule"]["method"]
+    rule = report["detection_rule"]
     # the null waited for the ranking: its directions are stripped of the responses of the set it judges
-    assert "output responses of the top set's candidates" in method
-    assert f"({', '.join(report['indistinguishable_set'])})" in method
+    stripped_of = rule["null_directions_orthogonal_to"]
+    assert "output responses of the top set's candidates" in stripped_of
+    assert f"({', '.join(report['indistinguishable_set'])})" in stripped_of
+    assert stripped_of in rule["method"]
     assert (
         "directions fitted the same way, each orthogonal to the output responses"
         in render_report(report)
