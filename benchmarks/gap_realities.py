@@ -29,7 +29,8 @@ flights a seed, one false alarm is 0.25 with an interval of 0.05-0.70.
 
 ``python benchmarks/gap_realities.py --combine a.json b.json ... [--out pooled.json]`` pools the cases
 of earlier results (each seed's part once: a seed run as two processes, one per part, writes its
-semi-real part twice) and scores them as one.
+semi-real part twice) and scores them as one. ``--figure scores.png`` (either mode) also draws the
+rates against issue 15's targets (benchmarks/realities_figure.py).
 """
 
 from __future__ import annotations
@@ -46,6 +47,7 @@ from pathlib import Path
 import independent_reality
 import numpy as np
 import semi_real
+from realities_figure import PARTS, save_realities_figure
 from scipy import stats
 
 from ornitail.core.output import to_jsonable
@@ -328,13 +330,40 @@ def combine(paths: list[Path]) -> dict[str, object]:
         part: [case for cases in seeds.values() for case in cases]
         for part, seeds in by_part.items()
     }
+    (validation, null_directions), *_ = designs
     return {
+        "validation": validation,
+        "null_directions": null_directions,
         "seeds": {
             part: sorted(s for s, cases in seeds.items() if cases)
             for part, seeds in by_part.items()
         },
         "scores": {part: summarise(cases) for part, cases in pooled.items()},
     }
+
+
+def seed_ranges(seeds: list[int]) -> str:
+    """Sorted seeds as ranges: [2018, 2019, 2020, 2024] -> "2018-2020, 2024"."""
+    ranges: list[list[int]] = []
+    for seed in sorted(seeds):
+        if ranges and seed == ranges[-1][-1] + 1:
+            ranges[-1].append(seed)
+        else:
+            ranges.append([seed])
+    return ", ".join(f"{run[0]}-{run[-1]}" if len(run) > 1 else f"{run[0]}" for run in ranges)
+
+
+def pooled_title(pooled: dict[str, object]) -> str:
+    """The figure's title for :func:`combine`'s result: each part's seeds and the design."""
+    seeds = "; ".join(
+        f"{name} {seed_ranges(pooled['seeds'][part])}"
+        for part, name in PARTS.items()
+        if pooled["seeds"].get(part)
+    )
+    return (
+        f"gap diagnosis on three realities, null directions {pooled['null_directions']}, "
+        f"validation {pooled['validation']}\nseeds: {seeds}"
+    )
 
 
 def main(argv: list[str] | None = None) -> dict[str, object]:
@@ -358,11 +387,19 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
     parser.add_argument(
         "--combine", type=Path, nargs="+", metavar="RESULT", help="pool earlier --out files"
     )
+    parser.add_argument(
+        "--figure",
+        type=Path,
+        metavar="PNG",
+        help="also draw the scores against issue 15's targets (benchmarks/realities_figure.py)",
+    )
     arguments = parser.parse_args(argv)
     if arguments.combine:
         pooled = combine(arguments.combine)
         if arguments.out:
             arguments.out.write_text(json.dumps(to_jsonable(pooled), indent=1))
+        if arguments.figure:
+            save_realities_figure(pooled["scores"], pooled_title(pooled), arguments.figure)
         print(json.dumps(to_jsonable(pooled), indent=1))
         return pooled
     started = time.monotonic()
@@ -384,6 +421,12 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
     }
     if arguments.out:
         arguments.out.write_text(json.dumps(to_jsonable(result), indent=1))
+    if arguments.figure:
+        title = (
+            f"gap diagnosis on three realities, seed {arguments.seed} "
+            f"(null directions {arguments.null_directions})"
+        )
+        save_realities_figure(result["scores"], title, arguments.figure)
     print(json.dumps(to_jsonable(result["scores"]), indent=1))
     return result
 

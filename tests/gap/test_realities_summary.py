@@ -4,7 +4,8 @@ results: every count is exact, so the bookkeeping of false alarms and misses is 
 import json
 
 import pytest
-from gap_realities import combine, summarise, wilson_interval
+from gap_realities import combine, main, seed_ranges, summarise, wilson_interval
+from realities_figure import realities_figure
 
 
 def case(expected, verdict, reported, in_library=True, closure_test=0.2, **more):
@@ -106,6 +107,7 @@ def test_combine_pools_every_seed_once_per_part(tmp_path):
         ),
     ]
     pooled = combine(files)
+    assert (pooled["validation"], pooled["null_directions"]) == ("all-folds", "any")
     assert pooled["seeds"] == {"semi_real": [1, 2], "sim": [1, 2], "independent": [1]}
     assert pooled["scores"]["semi_real"]["named_in_library"] == "2 of 2"
     assert pooled["scores"]["sim"]["false_alarms_on_no_effect"] == "1 of 3"
@@ -135,3 +137,39 @@ def test_a_file_that_is_not_a_result_is_named_in_one_line(tmp_path):
     with pytest.raises(SystemExit, match=r"notes.json: not a gap_realities result file") as raised:
         combine([stray])
     assert "\n" not in str(raised.value)
+
+
+def test_the_figure_puts_each_parts_rate_and_interval_against_the_issues_targets(tmp_path):
+    scores = {
+        "sim": summarise([case(None, "effect", "heave_damping")] + [case(None, "none", None)] * 3),
+        "semi_real": summarise([case("input_delay", "effect", "input_delay")]),
+    }
+    figure = realities_figure(scores, "title")
+    no_effect, in_library, outside, fresh, magnitudes = figure.axes
+    # the simulator's 1 of 4 false alarms: its point at 0.25 with the Wilson interval's ends as error bars
+    point = next(line for line in no_effect.lines if line.get_marker() == "o")
+    assert point.get_xydata().tolist() == [[0.0, 0.25]]
+    low, high = wilson_interval(1, 4)
+    (bars,) = no_effect.collections
+    assert bars.get_segments()[0][:, 1].tolist() == pytest.approx([low, high])
+    # the issue's target as a dashed line in each panel
+    targets = [
+        [line.get_ydata()[0] for line in axis.lines if line.get_linestyle() == "--"]
+        for axis in (no_effect, in_library, outside, fresh, magnitudes)
+    ]
+    assert targets == [[0.05], [0.95], [0.90], [0.90], [20.0]]
+    # a part without cases of a kind says so rather than drawing a point
+    texts = [text.get_text() for text in outside.texts]
+    assert texts.count("no cases") == 2
+    assert [tick.get_text() for tick in no_effect.get_xticklabels()] == ["simulator", "semi-real"]
+
+
+def test_combine_draws_the_figure_titled_with_each_parts_seeds(tmp_path):
+    files = [
+        _result_file(tmp_path / f"{seed}.json", seed, {"sim": [case(None, "none", None)]})
+        for seed in (2018, 2019, 2020, 2024)
+    ]
+    picture = tmp_path / "scores.png"
+    main(["--combine", *map(str, files), "--figure", str(picture)])
+    assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert seed_ranges([2024, 2018, 2020, 2019]) == "2018-2020, 2024"
