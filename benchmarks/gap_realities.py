@@ -21,8 +21,9 @@ measurement effect; and for named effects how often a fresh flight's closure
 run the derivative re-fit (docs/gap-diagnosis.md, Method step 7): how often its moves are supported
 by the test runs, and its median closure there.
 
-Each rate also gets its 95 % Wilson score interval (``rate_intervals_95``): with 4 effect-free
-flights a seed, one false alarm is 0.25 with an interval of 0.05-0.70.
+Each rate also gets its counts (``rate_counts``: [successes, cases]) and its 95 % Wilson score
+interval (``rate_intervals_95``): with 4 effect-free flights a seed, one false alarm is 0.25 with an
+interval of 0.05-0.70.
 
 ``python benchmarks/gap_realities.py [--sim-cases 10] [--independent-cases 12] [--seed 2018]
 [--out result.json] [--validation first-fold] [--null-directions any]``
@@ -296,6 +297,7 @@ def summarise(results: list[dict[str, object]]) -> dict[str, object]:
         "out_of_library_named_as": [r["reported"] or r["verdict"] for r in outside],
         "fresh_flight_closure_within_reported_interval": _rate(fresh),
         "fresh_flight_closure_within_prediction_interval": _rate(predicted),
+        "rate_counts": {name: [sum(flags), len(flags)] for name, flags in rates.items()},
         "rate_intervals_95": {
             name: wilson_interval(sum(flags), len(flags)) for name, flags in rates.items()
         },
@@ -353,16 +355,14 @@ def seed_ranges(seeds: list[int]) -> str:
     return ", ".join(f"{run[0]}-{run[-1]}" if len(run) > 1 else f"{run[0]}" for run in ranges)
 
 
-def pooled_title(pooled: dict[str, object]) -> str:
-    """The figure's title for :func:`combine`'s result: each part's seeds and the design."""
-    seeds = "; ".join(
-        f"{name} {seed_ranges(pooled['seeds'][part])}"
-        for part, name in PARTS.items()
-        if pooled["seeds"].get(part)
+def figure_title(design: dict[str, str], seeds: dict[str, list[int]]) -> str:
+    """The figure's title: the design (``validation``, ``null_directions``) and each part's seeds."""
+    parts = "; ".join(
+        f"{name} {seed_ranges(seeds[part])}" for part, name in PARTS.items() if seeds.get(part)
     )
     return (
-        f"gap diagnosis on three realities, null directions {pooled['null_directions']}, "
-        f"validation {pooled['validation']}\nseeds: {seeds}"
+        f"gap diagnosis on three realities, null directions {design['null_directions']}, "
+        f"validation {design['validation']}\nseeds: {parts}"
     )
 
 
@@ -394,12 +394,16 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
         help="also draw the scores against issue 15's targets (benchmarks/realities_figure.py)",
     )
     arguments = parser.parse_args(argv)
+    for option, path in (("--out", arguments.out), ("--figure", arguments.figure)):
+        if path is not None and not path.parent.is_dir():  # refused before a run of minutes
+            parser.error(f"{option} {path}: the folder {path.parent} does not exist")
     if arguments.combine:
         pooled = combine(arguments.combine)
         if arguments.out:
             arguments.out.write_text(json.dumps(to_jsonable(pooled), indent=1))
         if arguments.figure:
-            save_realities_figure(pooled["scores"], pooled_title(pooled), arguments.figure)
+            title = figure_title(pooled, pooled["seeds"])
+            save_realities_figure(pooled["scores"], title, arguments.figure)
         print(json.dumps(to_jsonable(pooled), indent=1))
         return pooled
     started = time.monotonic()
@@ -422,11 +426,8 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
     if arguments.out:
         arguments.out.write_text(json.dumps(to_jsonable(result), indent=1))
     if arguments.figure:
-        title = (
-            f"gap diagnosis on three realities, seed {arguments.seed} "
-            f"(null directions {arguments.null_directions})"
-        )
-        save_realities_figure(result["scores"], title, arguments.figure)
+        seeds = {part: [arguments.seed] for part, results in parts.items() if results}
+        save_realities_figure(result["scores"], figure_title(design, seeds), arguments.figure)
     print(json.dumps(to_jsonable(result["scores"]), indent=1))
     return result
 

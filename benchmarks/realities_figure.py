@@ -38,27 +38,19 @@ MAGNITUDE_TARGET_PERCENT = 20.0
 """Issue 15: the semi-real cases' injected magnitudes within 20 %."""
 
 
-def counts(rate_text: str) -> tuple[int, int] | None:
-    """``"k of n"`` (a summary's rate) as (k, n); None for ``"-"`` (no cases)."""
-    if rate_text == "-":
-        return None
-    successes, _, trials = rate_text.partition(" of ")
-    return int(successes), int(trials)
-
-
 def realities_figure(scores: dict[str, dict], title: str) -> plt.Figure:
-    """The figure of the module docstring from ``scores`` (part -> ``summarise``'s scores)."""
+    """The figure of the module docstring from ``scores`` (part -> ``summarise``'s scores: its
+    ``rate_counts`` and ``rate_intervals_95``, and the magnitude errors)."""
     figure, axes = plt.subplots(1, len(TARGETS) + 1, figsize=(3.0 * (len(TARGETS) + 1), 3.8))
     parts = [part for part in PARTS if part in scores]
-    for axis, (rate, (label, target, side)) in zip(axes, TARGETS.items(), strict=False):
+    for axis, (rate, (label, target, side)) in zip(axes[:-1], TARGETS.items(), strict=True):
         for position, part in enumerate(parts):
-            counted = counts(scores[part][rate])
-            if counted is None:
+            successes, trials = scores[part]["rate_counts"][rate]
+            if trials == 0:
                 axis.text(
                     position, 0.5, "no cases", ha="center", va="center", fontsize=8, rotation=90
                 )
                 continue
-            successes, trials = counted
             low, high = scores[part]["rate_intervals_95"][rate]
             share = successes / trials
             axis.errorbar(

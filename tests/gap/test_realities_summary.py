@@ -4,7 +4,7 @@ results: every count is exact, so the bookkeeping of false alarms and misses is 
 import json
 
 import pytest
-from gap_realities import combine, main, seed_ranges, summarise, wilson_interval
+from gap_realities import combine, figure_title, main, seed_ranges, summarise, wilson_interval
 from realities_figure import realities_figure
 
 
@@ -76,6 +76,8 @@ def test_wilson_intervals_match_the_closed_form_and_stay_inside_zero_and_one():
     assert wilson_interval(0, 24)[0] == 0.0 and wilson_interval(24, 24)[1] == 1.0
     assert wilson_interval(0, 0) is None
     scores = summarise([case(None, "effect", "heave_damping")] + [case(None, "none", None)] * 3)
+    assert scores["rate_counts"]["false_alarms_on_no_effect"] == [1, 4]
+    assert scores["rate_counts"]["out_of_library_unexplained_or_nearest_derivative"] == [0, 0]
     assert scores["rate_intervals_95"]["false_alarms_on_no_effect"] == wilson_interval(1, 4)
     assert scores["rate_intervals_95"]["out_of_library_unexplained_or_nearest_derivative"] is None
 
@@ -170,6 +172,22 @@ def test_combine_draws_the_figure_titled_with_each_parts_seeds(tmp_path):
         for seed in (2018, 2019, 2020, 2024)
     ]
     picture = tmp_path / "scores.png"
-    main(["--combine", *map(str, files), "--figure", str(picture)])
+    pooled = main(["--combine", *map(str, files), "--figure", str(picture)])
     assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert seed_ranges([2024, 2018, 2020, 2019]) == "2018-2020, 2024"
+    assert figure_title(pooled, pooled["seeds"]) == (
+        "gap diagnosis on three realities, null directions any, validation all-folds\n"
+        "seeds: simulator 2018-2020, 2024"
+    )
+
+
+@pytest.mark.parametrize("option", ["--figure", "--out"])
+def test_an_output_in_a_folder_that_does_not_exist_is_refused_in_one_line_before_any_run(
+    tmp_path, capsys, option
+):
+    missing = tmp_path / "no-such-folder" / "scores.png"
+    with pytest.raises(SystemExit) as raised:
+        main(["--sim-cases", "1", option, str(missing)])
+    assert raised.value.code == 2
+    (line,) = [text for text in capsys.readouterr().err.splitlines() if "error:" in text]
+    assert f"{option} {missing}: the folder {missing.parent} does not exist" in line
