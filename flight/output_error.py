@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ornitail.flight.discretisation import discretise
+from ornitail.flight.discretisation import DiscreteModel, discretise
 from ornitail.flight.fisher_information import fisher_information
 from ornitail.flight.identification_result import IdentificationResult
 from ornitail.flight.linear_simulation import output_sensitivities, simulate_outputs
@@ -47,6 +47,10 @@ class OutputErrorOptions:
     bound_iterations_allowed: int = 3
     max_damping: float = 1e10
     colored_sigma: str = "morelli"
+
+
+_Simulation = tuple[DiscreteModel, np.ndarray, np.ndarray]
+"""A discrete model, its simulated outputs and states."""
 
 
 class OutputErrorProblem:
@@ -73,6 +77,8 @@ class OutputErrorProblem:
             [[spec.parameter(n).upper for n in self.free_names], np.full(extra, np.inf)]
         )
         self.fixed_initial_state = np.zeros(state_count)
+        self._last_simulation: tuple[bytes, _Simulation] | None = None
+        self._last_sensitivities: tuple[bytes, np.ndarray] | None = None
 
     def split(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """All parameters (model file order) and the initial state for a theta."""
@@ -82,13 +88,25 @@ class OutputErrorProblem:
             return parameters, theta[len(self.free_indices) :]
         return parameters, self.fixed_initial_state
 
-    def outputs(self, theta: np.ndarray) -> np.ndarray:
-        """Simulated outputs (N, outputs) at theta."""
+    def _simulation(self, theta: np.ndarray) -> _Simulation:
+        """The discrete model, simulated outputs (N, outputs; NaN when unbounded) and states at
+        theta. The last theta's are kept: an accepted trial step is simulated again as the next
+        iterate, and the last iterate once more for the standard errors.
+        """
+        key = np.asarray(theta, dtype=float).tobytes()
+        if self._last_simulation is not None and self._last_simulation[0] == key:
+            return self._last_simulation[1]
         parameters, initial_state = self.split(theta)
         discrete = discretise(self.spec, parameters, self.constants, self.signals.time_step_s)
         with np.errstate(invalid="ignore", over="ignore"):
-            outputs, _ = simulate_outputs(discrete, initial_state, self.signals.inputs)
-        return self._unless_unbounded(outputs)
+            outputs, states = simulate_outputs(discrete, initial_state, self.signals.inputs)
+        simulation = (discrete, self._unless_unbounded(outputs), states)
+        self._last_simulation = (key, simulation)
+        return simulation
+
+    def outputs(self, theta: np.ndarray) -> np.ndarray:
+        """Simulated outputs (N, outputs) at theta."""
+        return self._simulation(theta)[1]
 
     def _unless_unbounded(self, outputs: np.ndarray) -> np.ndarray:
         """NaN for a simulation that grows beyond 1e6 times the largest measured value (an
@@ -102,16 +120,16 @@ class OutputErrorProblem:
 
     def outputs_and_sensitivities(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Outputs (N, outputs) and dy/dtheta (N, outputs, len(theta))."""
-        parameters, initial_state = self.split(theta)
-        discrete = discretise(self.spec, parameters, self.constants, self.signals.time_step_s)
-        with np.errstate(invalid="ignore", over="ignore"):
-            outputs, states = simulate_outputs(discrete, initial_state, self.signals.inputs)
-        outputs = self._unless_unbounded(outputs)
+        discrete, outputs, states = self._simulation(theta)
         if not np.all(np.isfinite(outputs)):
             return outputs, np.full((*outputs.shape, len(theta)), np.nan)
+        key = np.asarray(theta, dtype=float).tobytes()
+        if self._last_sensitivities is not None and self._last_sensitivities[0] == key:
+            return outputs, self._last_sensitivities[1]
         sensitivities = output_sensitivities(
             discrete, states, self.signals.inputs, self.free_indices, self.estimates_initial_state
         )
+        self._last_sensitivities = (key, sensitivities)
         return outputs, sensitivities
 
 
