@@ -47,6 +47,12 @@ class TrimState:
     elevator_rad: float = 0.0
 
 
+def _floats(state: np.ndarray) -> list[float]:
+    """The state's values as Python floats: the same numbers, with cheaper scalar arithmetic than
+    numpy scalars (the integrator evaluates the model some 10^5 times per flight)."""
+    return state.tolist() if isinstance(state, np.ndarray) else [float(value) for value in state]
+
+
 class FlightDynamics:
     """Nonlinear cycle-averaged free-flight dynamics of one build (a :class:`PreparedVehicle`)."""
 
@@ -58,25 +64,46 @@ class FlightDynamics:
         """Flapping frequency during motion: motor response at trim throttle (coupling on) or trim
         value.
         """
+        q, u, w, _ = _floats(state)
+        return self._frequency(q, u, w, trim)
+
+    def _frequency(self, q: float, u: float, w: float, trim: TrimState) -> float:
         coupling = self.effects.flapping_frequency_coupling
         if not coupling.enabled:
             return trim.flapping_frequency_hz
-        q, u, w, _ = state
         settled = self.vehicle.motor_frequency(trim.throttle, u, w, q, trim.flapping_frequency_hz)
         return trim.flapping_frequency_hz + coupling.gain * (settled - trim.flapping_frequency_hz)
 
     def forces(self, state: np.ndarray, elevator_rad: float, trim: TrimState) -> np.ndarray:
         """[M, X, Z] cycle-averaged at a state [q, u, w, theta] (N m, N, N)."""
-        q, u, w, _ = state
-        loads = self.vehicle.loads(u, w, q, self.frequency(state, trim), elevator_rad)
-        return np.array([loads.m_n_m, loads.x_n, loads.z_n])
+        return np.array(self._forces(*_floats(state)[:3], float(elevator_rad), trim, None))
+
+    def _forces(
+        self,
+        q: float,
+        u: float,
+        w: float,
+        elevator_rad: float,
+        trim: TrimState,
+        frequency_hz: float | None,
+    ) -> tuple[float, float, float]:
+        if frequency_hz is None:
+            frequency_hz = self._frequency(q, u, w, trim)
+        loads = self.vehicle.loads(u, w, q, frequency_hz, elevator_rad)
+        return loads.m_n_m, loads.x_n, loads.z_n
 
     def state_derivative(
-        self, state: np.ndarray, elevator_rad: float, trim: TrimState
+        self,
+        state: np.ndarray,
+        elevator_rad: float,
+        trim: TrimState,
+        frequency_hz: float | None = None,
     ) -> np.ndarray:
-        """d/dt [q, u, w, theta] from the rigid-body equations."""
-        q, u, w, theta = state
-        moment, x, z = self.forces(state, elevator_rad, trim)
+        """d/dt [q, u, w, theta] from the rigid-body equations; ``frequency_hz``, when given, is
+        :meth:`frequency` at this state, already computed.
+        """
+        q, u, w, theta = _floats(state)
+        moment, x, z = self._forces(q, u, w, float(elevator_rad), trim, frequency_hz)
         mass = self.vehicle.mass_kg
         return np.array(
             [

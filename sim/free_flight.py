@@ -144,8 +144,10 @@ def simulate_flight(
     disturbance = np.where(turning, turn_moments[turn_index], 0.0)
     inertia = vehicle.effective_iyy_kg_m2
 
-    def derivative(state: np.ndarray, fine_index: int, gust: float) -> np.ndarray:
-        rate = dynamics.state_derivative(state, deflection[fine_index], trim)
+    def derivative(
+        state: np.ndarray, fine_index: int, gust: float, frequency_hz: float | None = None
+    ) -> np.ndarray:
+        rate = dynamics.state_derivative(state, deflection[fine_index], trim, frequency_hz)
         rate[0] += (disturbance[fine_index] + gust) / inertia
         return rate
 
@@ -154,11 +156,11 @@ def simulate_flight(
     state = dynamics.trim_state_vector(trim)
     for index in range(steps + 1):
         states[index] = state
-        frequencies[index] = dynamics.frequency(state, trim)
+        frequencies[index] = frequency = dynamics.frequency(state, trim)
         if index == steps:
             break
         gust, half = gusts[index], 2 * index
-        k1 = derivative(state, half, gust)
+        k1 = derivative(state, half, gust, frequency)
         k2 = derivative(state + 0.5 * step * k1, half + 1, gust)
         k3 = derivative(state + 0.5 * step * k2, half + 1, gust)
         k4 = derivative(state + step * k3, half + 2, gust)
