@@ -66,6 +66,8 @@ from ornitail.flight.output_error import OutputErrorProblem, noise_variances
 from ornitail.flight.residual_statistics import (
     COLORED_SIGMA_METHODS,
     colored_residual_covariance,
+    morelli_colored_covariance,
+    small_sample_factor,
 )
 from ornitail.sim.configuration import study_configuration
 from ornitail.sim.dynamics import linearise
@@ -76,14 +78,19 @@ REPRESENTATIVE_TARGET_PARAMETERS = ("Mq", "Mde", "Xu", "Mu")
 REPRESENTATIVE_TARGET = 0.90
 
 
-def covariances_at_estimate(result: IdentificationResult, data) -> dict[str, np.ndarray]:
-    """Parameter covariance of an output-error result for every kind of :data:`SIGMA_KINDS`
-    (``morelli``, ``morelli_small_sample``, ``tapered``, ``cramer_rao``), evaluated at its
-    estimate on the data it was fitted to, for its derivatives (nuisance parameters dropped: the
-    marginal covariance; parameter units squared).
+def covariances_at_estimate(
+    result: IdentificationResult, data, kinds: Sequence[str] = SIGMA_KINDS
+) -> dict[str, np.ndarray]:
+    """Parameter covariance of an output-error result for every kind of ``kinds`` (default
+    :data:`SIGMA_KINDS`: ``morelli``, ``morelli_small_sample``, ``tapered``, ``cramer_rao``),
+    evaluated at its estimate on the data it was fitted to, for its derivatives (nuisance
+    parameters dropped: the marginal covariance; parameter units squared).
 
     Each is what ``estimate_output_error`` computes at convergence with
     ``OutputErrorOptions(colored_sigma=kind)``; the estimate itself does not depend on it.
+    ``morelli_small_sample`` is ``morelli`` times the small-sample factor, as
+    :func:`~ornitail.flight.residual_statistics.colored_residual_covariance` computes it; ``morelli``
+    is formed once for both.
     """
     spec = result.model
     signals = model_data(spec, data)
@@ -99,9 +106,18 @@ def covariances_at_estimate(result: IdentificationResult, data) -> dict[str, np.
         index for index, name in enumerate(result.parameter_names) if name in spec.derivative_names
     ]
     covariances = {}
-    for kind in SIGMA_KINDS:
+    morelli = None
+    for kind in kinds:
         if kind == "cramer_rao":
             covariance = np.linalg.inv(information)
+        elif kind in ("morelli", "morelli_small_sample"):
+            if morelli is None:
+                morelli = morelli_colored_covariance(
+                    sensitivities * weights[None, :, None], residuals, information
+                )
+            covariance = morelli
+            if kind == "morelli_small_sample":
+                covariance = morelli * small_sample_factor(residuals, information.shape[0])
         else:
             covariance = colored_residual_covariance(
                 sensitivities * weights[None, :, None], residuals, information, kind

@@ -135,7 +135,9 @@ def test_small_sample_intervals_are_too_wide_on_model_structure_residuals(campai
     for result in campaigns:
         truth = linearise(study_configuration(_tail(result), X_H_MM)).derivatives
         for model in result.models:
-            covariance = covariances_at_estimate(model.result, model.manoeuvre.deviations)
+            covariance = covariances_at_estimate(
+                model.result, model.manoeuvre.deviations, kinds=("morelli_small_sample",)
+            )
             sigma = np.sqrt(np.diag(covariance["morelli_small_sample"]))
             errors = model.values - np.array([truth[name] for name in model.parameter_names])
             covered.append(np.abs(errors) <= NORMAL_QUANTILE_95 * sigma)

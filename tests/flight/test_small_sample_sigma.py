@@ -115,7 +115,7 @@ def monte_carlo(model):
             continue
         values = np.array([result.parameters[name].value for name in names])
         errors.append(values - np.array([derivatives[name] for name in names]))
-        covariances = covariances_at_estimate(result, data)
+        covariances = covariances_at_estimate(result, data, kinds=tuple(sigmas))
         for kind in sigmas:
             sigmas[kind].append(np.sqrt(np.diag(covariances[kind])))
     return np.array(errors), {kind: np.array(rows) for kind, rows in sigmas.items()}
@@ -161,7 +161,8 @@ def test_the_option_reaches_the_estimator(model):
     corrected = identify(
         model, data, options=OutputErrorOptions(colored_sigma="morelli_small_sample")
     )
-    expected = np.sqrt(np.diag(covariances_at_estimate(default, data)["morelli_small_sample"]))
+    expected = covariances_at_estimate(default, data, kinds=("morelli_small_sample",))
+    expected = np.sqrt(np.diag(expected["morelli_small_sample"]))
     names = model.derivative_names
     got = np.array([corrected.parameters[name].sigma_colored for name in names])
     assert np.allclose(got, expected, rtol=1e-6)
