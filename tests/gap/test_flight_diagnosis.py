@@ -12,14 +12,32 @@ from ornitail.gap.withheld_effects import WithheldCase, simulate_withheld_log, t
 from ornitail.sim.free_flight import write_flight_log_csv
 
 
+@pytest.fixture(scope="module")
+def flight_log(tmp_path_factory):
+    """``log(case)``: the case's simulated flight log, written as a CSV flight log once per module
+    (several tests diagnose one flight with different settings; the simulation is deterministic)."""
+    written = {}
+
+    def log(case: WithheldCase):
+        if repr(case) not in written:
+            folder = tmp_path_factory.mktemp("flight")
+            written[repr(case)] = write_flight_log_csv(
+                simulate_withheld_log(case), folder / "flight.csv"
+            )
+        return written[repr(case)]
+
+    return log
+
+
 def _diagnosis(
+    log,
     case: WithheldCase,
     folder,
     candidates: tuple[str, ...] = (),
     validation: str = "all-folds",
     null_directions: str | None = None,
 ) -> FlightDiagnosis:
-    log = write_flight_log_csv(simulate_withheld_log(case), folder / "flight.csv")
+    """``case``'s baseline (with these settings, written to ``folder``) diagnosed on ``log``."""
     spec = dataclasses.replace(
         case.baseline_spec(),
         candidates=candidates,
@@ -30,14 +48,18 @@ def _diagnosis(
     return diagnose_flight(spec, [log], seed=5)
 
 
-def _diagnose(case: WithheldCase, folder) -> dict:
-    return _diagnosis(case, folder).report
+def _diagnose(log, case: WithheldCase, folder) -> dict:
+    return _diagnosis(log, case, folder).report
+
+
+ADDED_MASS = WithheldCase("S4", 105.0, {"added_mass": 3.0}, manoeuvres=16, seed=21)
+INPUT_DELAY = WithheldCase("AR4", 80.0, {"input_delay": 0.07}, manoeuvres=14, seed=9)
 
 
 @pytest.fixture(scope="module")
-def added_mass_diagnosis(tmp_path_factory):
-    case = WithheldCase("S4", 105.0, {"added_mass": 3.0}, manoeuvres=16, seed=21)
-    return case, _diagnosis(case, tmp_path_factory.mktemp("added_mass"))
+def added_mass_diagnosis(flight_log, tmp_path_factory):
+    case = ADDED_MASS
+    return case, _diagnosis(flight_log(case), case, tmp_path_factory.mktemp("added_mass"))
 
 
 @pytest.fixture(scope="module")
@@ -75,7 +97,7 @@ def test_the_gap_is_reported_on_test_manoeuvres_that_neither_fitted_nor_chose(
 
 
 def test_pooled_validation_decides_on_every_folds_validation_runs_and_leaves_how_far_alone(
-    added_mass_diagnosis, tmp_path
+    added_mass_diagnosis, flight_log, tmp_path
 ):
     """``validation = "all-folds"`` (the default): the ranking and the rule see the 4 x 4
     validation runs of the four folds (the null's 24 directions fitted in each), the named effect
@@ -84,7 +106,7 @@ def test_pooled_validation_decides_on_every_folds_validation_runs_and_leaves_how
     decision only."""
     case, pooled = added_mass_diagnosis
     report = pooled.report
-    first_fold = _diagnosis(case, tmp_path, validation="first-fold")
+    first_fold = _diagnosis(flight_log(case), case, tmp_path, validation="first-fold")
     split = report["split"]
     assert split["validation_design"] == "all-folds"
     assert (report["runs"]["validation"], report["runs"]["training"]) == (16, 32)
@@ -143,17 +165,17 @@ def test_where_reports_channels_bands_segments_and_tests(added_mass_report):
     assert len(where["summary"]) == 5
 
 
-def test_no_withheld_effect_gives_no_verdict(tmp_path):
+def test_no_withheld_effect_gives_no_verdict(flight_log, tmp_path):
     case = WithheldCase("S2", 90.0, {}, manoeuvres=14, seed=8)
-    report = _diagnose(case, tmp_path)
+    report = _diagnose(flight_log(case), case, tmp_path)
     assert report["verdict"] == "none"
     assert report["effect"] is None
     assert report["magnitude"]["at_bound"] in (None, "lower", "upper")
 
 
-def test_input_delay_is_named_and_its_size_recovered(tmp_path):
-    case = WithheldCase("AR4", 80.0, {"input_delay": 0.07}, manoeuvres=14, seed=9)
-    report = _diagnose(case, tmp_path)
+def test_input_delay_is_named_and_its_size_recovered(flight_log, tmp_path):
+    case = INPUT_DELAY
+    report = _diagnose(flight_log(case), case, tmp_path)
     assert report["effect"] == "input_delay"
     # the delay is resolved to a fraction of the 1/64 s step by interpolation; 15 % = 10 ms
     assert report["magnitude"]["value"] == pytest.approx(0.07, rel=0.15)
@@ -161,12 +183,16 @@ def test_input_delay_is_named_and_its_size_recovered(tmp_path):
 
 
 def test_the_top_set_orthogonal_null_is_drawn_after_ranking_against_the_top_sets_responses(
-    tmp_path,
+    flight_log, tmp_path
 ):
-    case = WithheldCase("AR4", 80.0, {"input_delay": 0.07}, manoeuvres=14, seed=9)
+    case = INPUT_DELAY
     candidates = ("input_delay", "input_filter", "pitch_damping", "control_power")
     report = _diagnosis(
-        case, tmp_path, candidates=candidates, null_directions="top-set-orthogonal"
+        flight_log(case),
+        case,
+        tmp_path,
+        candidates=candidates,
+        null_directions="top-set-orthogonal",
     ).report
     assert report["effect"] == "input_delay"
     assert report["magnitude"]["value"] == pytest.approx(0.07, rel=0.15)
@@ -187,10 +213,14 @@ def test_the_top_set_orthogonal_null_is_drawn_after_ranking_against_the_top_sets
         assert "output responses of the top set's candidates" in second["detection_rule"]["method"]
 
 
-def test_a_drift_beyond_the_candidates_range_is_reported_as_at_least_its_bound(tmp_path):
+def test_a_drift_beyond_the_candidates_range_is_reported_as_at_least_its_bound(
+    flight_log, tmp_path
+):
     # 0.08 rad/s of logged theta drift; the theta_drift candidate's range ends at 0.05 rad/s
     case = WithheldCase("S3", 90.0, {"theta_drift": 0.08}, manoeuvres=8, seed=3)
-    report = _diagnosis(case, tmp_path, candidates=("theta_drift", "pitch_damping")).report
+    report = _diagnosis(
+        flight_log(case), case, tmp_path, candidates=("theta_drift", "pitch_damping")
+    ).report
     assert report["best_candidate"] == "theta_drift"
     assert report["magnitude"]["at_bound"] == "upper"
     assert report["magnitude"]["value"] == pytest.approx(0.05, abs=1e-3)
@@ -201,9 +231,9 @@ def test_a_drift_beyond_the_candidates_range_is_reported_as_at_least_its_bound(t
         assert f">= {entry['simultaneous_lower_bound']:+.3f}" in text
 
 
-def test_a_second_effect_is_found_on_top_of_the_first(tmp_path):
+def test_a_second_effect_is_found_on_top_of_the_first(flight_log, tmp_path):
     case = WithheldCase("S3", 105.0, {"pitch_damping": 0.6, "theta_drift": 0.01}, 14, seed=4)
-    report = _diagnose(case, tmp_path)
+    report = _diagnose(flight_log(case), case, tmp_path)
     found = {report["effect"], (report["second_effect"] or {}).get("effect")}
     assert found == {"pitch_damping", "theta_drift"}
     second = report["second_effect"]
