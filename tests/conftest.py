@@ -61,6 +61,29 @@ RIG_BOUND_PATHS = (
 )
 """Tests that drive a simulated rig or stream through a transport at rate (run after the others)."""
 RIG_FIXTURES = {"simulated_rig", "simulated_daq", "simulated_netcanoem", "simulated_netft"}
+LONGEST_FILES = (
+    "tests/gap/test_flight_diagnosis.py",
+    "tests/flight/test_campaign_coverage.py",
+    "tests/flight/test_small_sample_sigma.py",
+    "tests/gap/test_benchmark.py",
+    "tests/balance/test_derivatives.py",
+    "tests/gap/test_semi_real.py",
+    "tests/flight/test_campaign_simulated.py",
+    "tests/gap/test_lateral_model.py",
+    "tests/gap/test_steady_state_diagnosis.py",
+    "tests/gap/test_gap_pictures.py",
+    "tests/flight/test_campaign_cli.py",
+    "tests/design/test_design_pictures.py",
+    "tests/gap/test_derivative_refit.py",
+    "tests/design/test_proposal.py",
+    "tests/flight/test_estimation_coverage.py",
+)
+"""The rig-free files that take longest (CPU time, longest first, as measured on two workers: the first
+two about a minute each, the last about 10 s), run before the others. pytest-xdist's ``--dist loadfile``
+hands out whole files in collection order (with ``--no-loadscope-reorder``; by default it starts
+with the files that hold the most tests, which left these few-test, long files to the end, one
+worker computing a campaign while the other had finished): longest first leaves only short files
+to even out the two workers' ends. A scheduling hint only: a file missing here runs all the same."""
 PHASES = ("all", "no-rig", "rig")
 """``--ornitail-phase``: every test, those that drive no simulated rig, or those that do."""
 EXTERNAL_DEMO_VARIABLE = "ORNITAIL_TEST_DEMO_FOLDER"
@@ -159,9 +182,16 @@ def _is_the_demo(item: pytest.Item) -> bool:
     return item.nodeid.startswith(DEMO_TEST_FILE)
 
 
+def _length_rank(item: pytest.Item) -> int:
+    """The item's file's place in :data:`LONGEST_FILES` (after them: the number of them)."""
+    path = item.nodeid.split("::", 1)[0]
+    return LONGEST_FILES.index(path) if path in LONGEST_FILES else len(LONGEST_FILES)
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Only the phase's tests; those that drive no simulated rig first (the demo records meanwhile), in their
-    usual order otherwise; in the rig phase the demo's test first (it waits for the demo to end)."""
+    """Only the phase's tests; those that drive no simulated rig first (the demo records meanwhile), the
+    longest files among them first (:data:`LONGEST_FILES`), in their usual order otherwise; in the rig phase
+    the demo's test first (it waits for the demo to end)."""
     phase = config.getoption("--ornitail-phase")
     if phase != "all":
         wanted = phase == "rig"
@@ -172,7 +202,7 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     if phase == "rig":
         items.sort(key=lambda item: not _is_the_demo(item))
     else:
-        items.sort(key=_drives_a_rig)
+        items.sort(key=lambda item: (_drives_a_rig(item), _length_rank(item)))
 
 
 def pytest_collection_finish(session: pytest.Session) -> None:
