@@ -40,10 +40,7 @@ trap cleanup EXIT
 export ORNITAIL_TEST_DEMO_FOLDER="$demo_folder"
 
 no_rig_status=0
-# --no-loadscope-reorder: files in collection order, which starts with the longest (tests/conftest.py,
-# LONGEST_FILES); xdist's default order (most tests first) left the long few-test files to the end.
-.venv/bin/python -m pytest --ornitail-phase=no-rig -n 2 --dist loadfile --no-loadscope-reorder ||
-  no_rig_status=$?
+.venv/bin/python -m pytest --ornitail-phase=no-rig -n 2 --dist loadfile || no_rig_status=$?
 # A deadline, not a synchronisation: the demo's test reports a demo that has not ended by then, with its log.
 for _ in $(seq 1200); do
   [ -s "$demo_folder/returncode" ] && break

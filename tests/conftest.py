@@ -80,10 +80,10 @@ LONGEST_FILES = (
 )
 """The rig-free files that take longest (CPU time, longest first, as measured on two workers: the first
 two about a minute each, the last about 10 s), run before the others. pytest-xdist's ``--dist loadfile``
-hands out whole files in collection order (with ``--no-loadscope-reorder``; by default it starts
-with the files that hold the most tests, which left these few-test, long files to the end, one
-worker computing a campaign while the other had finished): longest first leaves only short files
-to even out the two workers' ends. A scheduling hint only: a file missing here runs all the same."""
+hands out whole files in collection order once its ``--loadscope-reorder`` is off (:func:`pytest_configure`);
+that default starts with the files that hold the most tests, which left these few-test, long files to the
+end, one worker computing a campaign while the other had finished. Longest first leaves only short files to
+even out the two workers' ends. A scheduling hint only: a file missing here runs all the same."""
 PHASES = ("all", "no-rig", "rig")
 """``--ornitail-phase``: every test, those that drive no simulated rig, or those that do."""
 EXTERNAL_DEMO_VARIABLE = "ORNITAIL_TEST_DEMO_FOLDER"
@@ -241,6 +241,10 @@ def _terminal() -> int:
 
 def pytest_configure(config: pytest.Config) -> None:
     _terminal()
+    if config.getoption("--ornitail-phase") != "rig" and hasattr(config.option, "loadscopereorder"):
+        # pytest-xdist's --dist loadfile/loadscope would hand out the files with the most tests first
+        # (--loadscope-reorder, its default), not the longest ones first (LONGEST_FILES)
+        config.option.loadscopereorder = False
 
 
 @pytest.hookimpl(hookwrapper=True)
