@@ -102,7 +102,7 @@ def _outcome(
     return result
 
 
-def _fresh_closure(diagnosis: FlightDiagnosis, spec_path: Path, log_path: Path) -> float:
+def fresh_closure(diagnosis: FlightDiagnosis, spec_path: Path, log_path: Path) -> float:
     """Closure of the diagnosis' chosen model on another flight (its own channel weights)."""
     runs = read_record(read_baseline_spec(spec_path), [log_path]).runs
 
@@ -185,7 +185,7 @@ def independent_part(
             if diagnosis.report["verdict"] == "effect":
                 fresh_case = type(case)(case.effect, case.magnitude, case.seed + 1)
                 fresh_log, _ = independent_reality.write_case(fresh_case, Path(folder) / "fresh")
-                _within(result, _fresh_closure(diagnosis, spec_path, fresh_log))
+                _within(result, fresh_closure(diagnosis, spec_path, fresh_log))
         results.append(result)
         tick(f"independent {index + 1}/{cases}: {case.effect} -> {result['verdict']}")
     return results

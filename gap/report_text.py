@@ -218,7 +218,8 @@ def render_report(report: dict[str, Any]) -> str:
         fresh_low, fresh_high = closure["fresh_data_interval"]
         lines.append(
             f"  on new data of as many runs (a fresh flight): closure {fresh_low:.3f} to "
-            f"{fresh_high:.3f} (90 % prediction interval: these runs' scatter and the new data's own)"
+            f"{fresh_high:.3f} (90 % prediction interval: these runs' scatter and the new data's own; "
+            "not a flight that differs from this one as a whole, e.g. in its slow states)"
         )
     lines += derivative_refit_lines(report.get("derivative_refit"))
     pointer = report["sparse_regression"]

@@ -1,0 +1,139 @@
+"""Several fresh flights per case: how often the reported prediction interval holds a new flight.
+
+``gap_realities.py`` scores each named effect against one fresh flight. This script diagnoses the
+same cases (the simulator's, ``--part sim``, or flapper B's, ``--part independent``; the default
+design) and flies ``--fresh`` new flights of each named case (the case's seed + 1 ... + K: other
+gusts and noise, the same vehicle and effect). Each new flight's closure under the diagnosis'
+model and channel weights is held against the report's ``fresh_data_interval`` (90 %). With
+several flights per case a case's own rate shows: an interval centred on a flight that differs
+from the others as a whole misses all of them (docs/gap-diagnosis.md, *Detection limits*).
+
+``python benchmarks/fresh_flights.py --part independent --seed 2040 --cases 24 --fresh 4
+[--out result.json]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+import independent_reality
+from gap_realities import fresh_closure, wilson_interval
+
+from ornitail.core.output import to_jsonable
+from ornitail.gap.benchmark import draw_case as draw_sim_case
+from ornitail.gap.flight_diagnosis import diagnose_flight
+from ornitail.gap.model_spec import read_baseline_spec, write_baseline_spec
+from ornitail.gap.withheld_effects import simulate_withheld_log
+from ornitail.sim.free_flight import write_flight_log_csv
+
+PARTS = ("sim", "independent")
+
+
+def _flights(part: str, index: int, seed: int, fresh: int, folder: Path):
+    """The case's label, its log, its baseline file and its ``fresh`` new flights' logs."""
+    if part == "sim":
+        case = draw_sim_case(index, seed, independent_reality.MANOEUVRES)
+        log = write_flight_log_csv(simulate_withheld_log(case), folder / "flight.csv")
+        spec_path = write_baseline_spec(case.baseline_spec(), folder / "baseline.toml")
+        new = [
+            write_flight_log_csv(
+                simulate_withheld_log(dataclasses.replace(case, seed=case.seed + number)),
+                folder / f"fresh-{number}.csv",
+            )
+            for number in range(1, fresh + 1)
+        ]
+        return ",".join(sorted(case.effects)) or None, log, spec_path, new
+    case = independent_reality.draw_case(index, seed)
+    log, spec_path = independent_reality.write_case(case, folder)
+    new = [
+        independent_reality.write_case(
+            dataclasses.replace(case, seed=case.seed + number), folder / f"fresh-{number}"
+        )[0]
+        for number in range(1, fresh + 1)
+    ]
+    return None if case.effect == "none" else case.effect, log, spec_path, new
+
+
+def run_case(part: str, index: int, seed: int, fresh: int) -> dict[str, object]:
+    """Diagnose the ``index``-th case of ``part`` at ``seed``; when it names an effect, score
+    ``fresh`` new flights against its prediction interval."""
+    with tempfile.TemporaryDirectory(prefix="ornitail-fresh-") as folder:
+        expected, log, spec_path, new = _flights(part, index, seed, fresh, Path(folder))
+        diagnosis = diagnose_flight(read_baseline_spec(spec_path), [log], seed=seed)
+        report = diagnosis.report
+        result = {"index": index, "expected": expected, "verdict": report["verdict"]}
+        if report["verdict"] != "effect":
+            return result
+        low, high = report["closure"]["fresh_data_interval"]
+        closures = [fresh_closure(diagnosis, spec_path, path) for path in new]
+    return result | {
+        "reported": report["effect"],
+        "closure_test": report["closure"]["realised_test"],
+        "closure_fresh_data_interval": [low, high],
+        "closure_fresh_flights": closures,
+        "below": sum(value < low for value in closures),
+        "above": sum(value > high for value in closures),
+    }
+
+
+def summarise(results: list[dict[str, object]]) -> dict[str, object]:
+    """Fresh flights inside the interval (with a 95 % Wilson interval, flights counted as if
+    independent: those of one case are not, so it is narrower than it should be), below and above
+    it, and the cases whose interval held none of their fresh flights."""
+    named = [r for r in results if "closure_fresh_flights" in r]
+    flights = sum(len(r["closure_fresh_flights"]) for r in named)
+    below = sum(r["below"] for r in named)
+    above = sum(r["above"] for r in named)
+    inside = flights - below - above
+    return {
+        "cases": len(results),
+        "cases_named": len(named),
+        "fresh_flights": flights,
+        "inside": inside,
+        "below": below,
+        "above": above,
+        "inside_rate": inside / flights if flights else None,
+        "inside_rate_interval_95": wilson_interval(inside, flights),
+        "cases_missing_every_fresh_flight": sum(
+            r["below"] + r["above"] == len(r["closure_fresh_flights"]) for r in named
+        ),
+    }
+
+
+def main(argv: list[str] | None = None) -> dict[str, object]:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--part", choices=PARTS, required=True)
+    parser.add_argument("--seed", type=int, default=2040)
+    parser.add_argument("--cases", type=int, default=10)
+    parser.add_argument("--fresh", type=int, default=4, help="new flights per named case")
+    parser.add_argument("--out", type=Path)
+    arguments = parser.parse_args(argv)
+    if arguments.out is not None and not arguments.out.parent.is_dir():
+        parser.error(f"--out {arguments.out}: the folder {arguments.out.parent} does not exist")
+    if arguments.fresh < 1 or arguments.cases < 1:
+        parser.error(
+            f"--cases {arguments.cases} --fresh {arguments.fresh}: both must be at least 1"
+        )
+    results = []
+    for index in range(arguments.cases):
+        results.append(run_case(arguments.part, index, arguments.seed, arguments.fresh))
+        print(json.dumps(to_jsonable(results[-1])), file=sys.stderr, flush=True)
+    output = {
+        "part": arguments.part,
+        "seed": arguments.seed,
+        "summary": summarise(results),
+        "results": results,
+    }
+    if arguments.out:
+        arguments.out.write_text(json.dumps(to_jsonable(output), indent=1))
+    print(json.dumps(to_jsonable(output["summary"]), indent=1))
+    return output
+
+
+if __name__ == "__main__":
+    main()
