@@ -138,6 +138,12 @@ def test_added_mass_is_named_with_its_indistinguishable_inertia_twin(added_mass_
     assert entry["probability_best"] == twin["probability_best"] == report["confidence"]
     text = render_report(report)
     assert f"P(best) {entry['probability_best']:.2f} (one model with iyy_shift)" in text
+    # the prediction interval's line says what it leaves out (docs/gap-diagnosis.md, Detection limits)
+    low, high = report["closure"]["fresh_data_interval"]
+    assert (
+        f"closure {low:.3f} to {high:.3f} (90 % prediction interval: these runs' scatter and the new "
+        "data's own; not a flight that differs from this one as a whole" in text
+    )
 
 
 def test_the_gap_shrinks_on_withheld_manoeuvres_and_training_predicts_it(added_mass_report):
