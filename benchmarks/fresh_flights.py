@@ -9,7 +9,9 @@ several flights per case a case's own rate shows: an interval centred on a fligh
 from the others as a whole misses all of them (docs/gap-diagnosis.md, *Detection limits*).
 
 ``python benchmarks/fresh_flights.py --part independent --seed 2040 --cases 24 --fresh 4
-[--out result.json]``
+[--out result.json] [--figure cases.png]``; ``--draw a.json b.json ... --figure cases.png`` draws
+earlier results without a run: a panel per file, each named case's interval, its test closure and
+its fresh flights (those outside in red).
 """
 
 from __future__ import annotations
@@ -22,7 +24,12 @@ import tempfile
 from pathlib import Path
 
 import independent_reality
+import matplotlib
 from gap_realities import fresh_closure, wilson_interval
+from realities_figure import PARTS as PART_NAMES
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402  (the backend is chosen first: the benchmarks run headless)
 
 from ornitail.core.output import to_jsonable
 from ornitail.gap.benchmark import draw_case as draw_sim_case
@@ -105,16 +112,65 @@ def summarise(results: list[dict[str, object]]) -> dict[str, object]:
     }
 
 
+def fresh_flights_figure(outputs: list[dict[str, object]]) -> plt.Figure:
+    """A panel per result (``main``'s output: part, seed, summary, results): for each named case its
+    90 % prediction interval (grey bar), its closure on test runs (black dot) and its fresh flights'
+    closures (crosses, red outside the interval)."""
+    figure, axes = plt.subplots(
+        len(outputs), 1, figsize=(8.0, 2.6 * len(outputs)), squeeze=False, sharey=True
+    )
+    for axis, output in zip(axes[:, 0], outputs, strict=True):
+        named = [r for r in output["results"] if "closure_fresh_flights" in r]
+        for position, result in enumerate(named):
+            low, high = result["closure_fresh_data_interval"]
+            axis.vlines(position, low, high, color="lightgrey", linewidth=6)
+            axis.plot(position, result["closure_test"], "o", color="black", markersize=4)
+            for value in result["closure_fresh_flights"]:
+                outside = value < low or value > high
+                axis.plot(position, value, "x", color="tab:red" if outside else "tab:blue")
+        summary = output["summary"]
+        axis.set_title(
+            f"{PART_NAMES[output['part']]}, seed {output['seed']}: {summary['inside']} of "
+            f"{summary['fresh_flights']} fresh flights inside ({summary['below']} below, "
+            f"{summary['above']} above)",
+            fontsize=9,
+        )
+        axis.set_xticks(range(len(named)), [str(r["index"]) for r in named], fontsize=7)
+        axis.set_xlim(-0.7, max(len(named), 1) - 0.3)
+        axis.grid(axis="y", alpha=0.3)
+        axis.set_ylabel("closure (-)", fontsize=8)
+    axes[-1, 0].set_xlabel(
+        "named case (index); grey: 90 % prediction interval, dot: test runs, x: fresh flights "
+        "(red: outside)",
+        fontsize=8,
+    )
+    figure.tight_layout()
+    return figure
+
+
 def main(argv: list[str] | None = None) -> dict[str, object]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--part", choices=PARTS, required=True)
+    parser.add_argument("--part", choices=PARTS)
     parser.add_argument("--seed", type=int, default=2040)
     parser.add_argument("--cases", type=int, default=10)
     parser.add_argument("--fresh", type=int, default=4, help="new flights per named case")
     parser.add_argument("--out", type=Path)
+    parser.add_argument("--figure", type=Path, metavar="PNG", help="also draw the cases")
+    parser.add_argument(
+        "--draw", type=Path, nargs="+", metavar="RESULT", help="draw earlier --out files (no run)"
+    )
     arguments = parser.parse_args(argv)
-    if arguments.out is not None and not arguments.out.parent.is_dir():
-        parser.error(f"--out {arguments.out}: the folder {arguments.out.parent} does not exist")
+    for option, path in (("--out", arguments.out), ("--figure", arguments.figure)):
+        if path is not None and not path.parent.is_dir():  # refused before a run of minutes
+            parser.error(f"{option} {path}: the folder {path.parent} does not exist")
+    if arguments.draw:
+        if arguments.figure is None:
+            parser.error("--draw needs --figure PNG: the picture to write")
+        outputs = [json.loads(path.read_text()) for path in arguments.draw]
+        fresh_flights_figure(outputs).savefig(arguments.figure, dpi=120)
+        return {"drawn": [str(path) for path in arguments.draw]}
+    if arguments.part is None:
+        parser.error("--part is required unless --draw is given")
     if arguments.fresh < 1 or arguments.cases < 1:
         parser.error(
             f"--cases {arguments.cases} --fresh {arguments.fresh}: both must be at least 1"
@@ -131,6 +187,8 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
     }
     if arguments.out:
         arguments.out.write_text(json.dumps(to_jsonable(output), indent=1))
+    if arguments.figure:
+        fresh_flights_figure([to_jsonable(output)]).savefig(arguments.figure, dpi=120)
     print(json.dumps(to_jsonable(output["summary"]), indent=1))
     return output
 

@@ -1,15 +1,19 @@
 """The several-fresh-flights benchmark's scoring (benchmarks/fresh_flights.py ``summarise``) on hand-made
 case results, and its refusals: every count is exact, so the bookkeeping is checked without a flight."""
 
+import json
+
 import pytest
-from fresh_flights import main, summarise
+from fresh_flights import fresh_flights_figure, main, summarise
 from gap_realities import wilson_interval
 
 
-def named(closures, low=0.2, high=0.4):
+def named(closures, low=0.2, high=0.4, index=1, closure_test=0.3):
     below = sum(value < low for value in closures)
     above = sum(value > high for value in closures)
     return {
+        "index": index,
+        "closure_test": closure_test,
         "expected": "input_delay",
         "verdict": "effect",
         "closure_fresh_data_interval": [low, high],
@@ -46,6 +50,7 @@ def test_no_named_case_gives_no_rate():
     [
         (["--out", "no-such-folder/result.json"], "the folder no-such-folder does not exist"),
         (["--fresh", "0"], "--cases 10 --fresh 0: both must be at least 1"),
+        (["--figure", "no-such-folder/cases.png"], "the folder no-such-folder does not exist"),
     ],
 )
 def test_bad_options_are_refused_in_one_line_before_a_flight(arguments, message, capsys):
@@ -54,3 +59,47 @@ def test_bad_options_are_refused_in_one_line_before_a_flight(arguments, message,
     assert ended.value.code == 2
     error = capsys.readouterr().err.strip().splitlines()[-1]
     assert message in error
+
+
+def test_draw_needs_a_picture_and_a_run_needs_a_part(capsys):
+    for arguments, message in (
+        (["--draw", "a.json"], "--draw needs --figure PNG"),
+        ([], "--part is required unless --draw is given"),
+    ):
+        with pytest.raises(SystemExit) as ended:
+            main(arguments)
+        assert ended.value.code == 2
+        assert message in capsys.readouterr().err.strip().splitlines()[-1]
+
+
+def test_the_figure_draws_each_cases_interval_test_closure_and_fresh_flights_red_outside(tmp_path):
+    results = [
+        named([0.25, 0.3, 0.35, 0.39], index=1),
+        named([0.41, 0.45, 0.5, 0.42], index=4, closure_test=0.38),
+        {"index": 5, "expected": None, "verdict": "none"},
+    ]
+    output = {
+        "part": "independent",
+        "seed": 2040,
+        "summary": summarise(results),
+        "results": results,
+    }
+    (axis,) = fresh_flights_figure([output]).axes
+    assert (
+        axis.get_title() == "flapper B, seed 2040: 4 of 8 fresh flights inside (0 below, 4 above)"
+    )
+    # the named cases only, labelled by their index
+    assert [tick.get_text() for tick in axis.get_xticklabels()] == ["1", "4"]
+    crosses = [line for line in axis.lines if line.get_marker() == "x"]
+    red = [line.get_xydata()[0].tolist() for line in crosses if line.get_color() == "tab:red"]
+    assert sorted(red) == [[1.0, 0.41], [1.0, 0.42], [1.0, 0.45], [1.0, 0.5]]
+    dots = [line.get_xydata()[0].tolist() for line in axis.lines if line.get_marker() == "o"]
+    assert dots == [[0.0, 0.3], [1.0, 0.38]]
+    (first, second) = axis.collections
+    assert first.get_segments()[0][:, 1].tolist() == [0.2, 0.4]
+    # --draw writes the same picture from saved results
+    saved = tmp_path / "seed.json"
+    saved.write_text(json.dumps(output))
+    picture = tmp_path / "cases.png"
+    main(["--draw", str(saved), "--figure", str(picture)])
+    assert picture.read_bytes().startswith(b"\x89PNG")
