@@ -25,7 +25,7 @@ from pathlib import Path
 
 import independent_reality
 import matplotlib
-from gap_realities import fresh_closure, wilson_interval
+from gap_realities import fresh_closure, refuse_missing_folders, wilson_interval
 from realities_figure import PARTS as PART_NAMES
 
 matplotlib.use("Agg")
@@ -41,7 +41,9 @@ from ornitail.sim.free_flight import write_flight_log_csv
 PARTS = ("sim", "independent")
 
 
-def _flights(part: str, index: int, seed: int, fresh: int, folder: Path):
+def _flights(
+    part: str, index: int, seed: int, fresh: int, folder: Path
+) -> tuple[str | None, Path, Path, list[Path]]:
     """The case's label, its log, its baseline file and its ``fresh`` new flights' logs."""
     if part == "sim":
         case = draw_sim_case(index, seed, independent_reality.MANOEUVRES)
@@ -148,6 +150,22 @@ def fresh_flights_figure(outputs: list[dict[str, object]]) -> plt.Figure:
     return figure
 
 
+def _saved_output(parser: argparse.ArgumentParser, path: Path) -> dict[str, object]:
+    """An earlier ``--out`` file, or one line (exit 2) saying why it is not one."""
+    try:
+        output = json.loads(path.read_text())
+        missing = {"part", "seed", "summary", "results"} - set(output)
+    except (OSError, ValueError, TypeError) as error:
+        parser.error(f"--draw {path}: not a fresh_flights result file ({error})")
+    if missing:
+        parser.error(
+            f"--draw {path}: not a fresh_flights result file (no {', '.join(sorted(missing))})"
+        )
+    if output["part"] not in PARTS:
+        parser.error(f"--draw {path}: part {output['part']!r} is not one of {', '.join(PARTS)}")
+    return output
+
+
 def main(argv: list[str] | None = None) -> dict[str, object]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--part", choices=PARTS)
@@ -160,13 +178,11 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
         "--draw", type=Path, nargs="+", metavar="RESULT", help="draw earlier --out files (no run)"
     )
     arguments = parser.parse_args(argv)
-    for option, path in (("--out", arguments.out), ("--figure", arguments.figure)):
-        if path is not None and not path.parent.is_dir():  # refused before a run of minutes
-            parser.error(f"{option} {path}: the folder {path.parent} does not exist")
+    refuse_missing_folders(parser, {"--out": arguments.out, "--figure": arguments.figure})
     if arguments.draw:
         if arguments.figure is None:
             parser.error("--draw needs --figure PNG: the picture to write")
-        outputs = [json.loads(path.read_text()) for path in arguments.draw]
+        outputs = [_saved_output(parser, path) for path in arguments.draw]
         fresh_flights_figure(outputs).savefig(arguments.figure, dpi=120)
         return {"drawn": [str(path) for path in arguments.draw]}
     if arguments.part is None:

@@ -366,6 +366,15 @@ def figure_title(design: dict[str, str], seeds: dict[str, list[int]]) -> str:
     )
 
 
+def refuse_missing_folders(
+    parser: argparse.ArgumentParser, outputs: dict[str, Path | None]
+) -> None:
+    """One line (exit 2) for an output option whose folder does not exist, before a run of minutes."""
+    for option, path in outputs.items():
+        if path is not None and not path.parent.is_dir():
+            parser.error(f"{option} {path}: the folder {path.parent} does not exist")
+
+
 def main(argv: list[str] | None = None) -> dict[str, object]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sim-cases", type=int, default=10)
@@ -394,9 +403,7 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
         help="also draw the scores against issue 15's targets (benchmarks/realities_figure.py)",
     )
     arguments = parser.parse_args(argv)
-    for option, path in (("--out", arguments.out), ("--figure", arguments.figure)):
-        if path is not None and not path.parent.is_dir():  # refused before a run of minutes
-            parser.error(f"{option} {path}: the folder {path.parent} does not exist")
+    refuse_missing_folders(parser, {"--out": arguments.out, "--figure": arguments.figure})
     if arguments.combine:
         pooled = combine(arguments.combine)
         if arguments.out:

@@ -72,6 +72,32 @@ def test_draw_needs_a_picture_and_a_run_needs_a_part(capsys):
         assert message in capsys.readouterr().err.strip().splitlines()[-1]
 
 
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (None, "not a fresh_flights result file ("),
+        ("[1, 2]", "not a fresh_flights result file ("),
+        ('{"part": "sim", "seed": 1}', "not a fresh_flights result file (no results, summary)"),
+        (
+            '{"part": "tunnel", "seed": 1, "summary": {}, "results": []}',
+            "part 'tunnel' is not one of sim, independent",
+        ),
+    ],
+)
+def test_a_draw_file_that_is_not_a_result_is_refused_in_one_line(
+    tmp_path, content, message, capsys
+):
+    path = tmp_path / "result.json"
+    if content is not None:
+        path.write_text(content)
+    with pytest.raises(SystemExit) as ended:
+        main(["--draw", str(path), "--figure", str(tmp_path / "cases.png")])
+    assert ended.value.code == 2
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert f"--draw {path}: " in error and message in error
+    assert not (tmp_path / "cases.png").exists()
+
+
 def test_the_figure_draws_each_cases_interval_test_closure_and_fresh_flights_red_outside(tmp_path):
     results = [
         named([0.25, 0.3, 0.35, 0.39], index=1),
