@@ -8,6 +8,13 @@ model and channel weights is held against the report's ``fresh_data_interval`` (
 several flights per case a case's own rate shows: an interval centred on a flight that differs
 from the others as a whole misses all of them (docs/gap-diagnosis.md, *Detection limits*).
 
+Each fresh flight's per-run energies (before and after, under the diagnosis' model and weights) are
+kept, and with two or more per case the ``replay`` part of the output asks why an interval misses:
+every fresh flight in turn gives the interval from its own runs and the others are held against it,
+as flown and with the case's runs dealt out at random into flights of the same size (runs as
+independent draws: what the interval assumes), and the runs' intraclass correlation (what the runs
+of one flight share, which no interval built from one flight can see).
+
 ``python benchmarks/fresh_flights.py --part independent --seed 2040 --cases 24 --fresh 4
 [--out result.json] [--figure cases.png]``; ``--draw a.json b.json ... --figure cases.png`` draws
 earlier results without a run: a panel per file, each named case's interval, its test closure and
@@ -25,7 +32,8 @@ from pathlib import Path
 
 import independent_reality
 import matplotlib
-from gap_realities import fresh_closure, refuse_missing_folders, wilson_interval
+import numpy as np
+from gap_realities import refuse_missing_folders, run_energies, wilson_interval
 from realities_figure import PARTS as PART_NAMES
 
 matplotlib.use("Agg")
@@ -33,12 +41,15 @@ import matplotlib.pyplot as plt  # noqa: E402  (the backend is chosen first: the
 
 from ornitail.core.output import to_jsonable
 from ornitail.gap.benchmark import draw_case as draw_sim_case
+from ornitail.gap.detection import closure_of
 from ornitail.gap.flight_diagnosis import diagnose_flight
+from ornitail.gap.intervals import fresh_data_interval
 from ornitail.gap.model_spec import read_baseline_spec, write_baseline_spec
 from ornitail.gap.withheld_effects import simulate_withheld_log
 from ornitail.sim.free_flight import write_flight_log_csv
 
 PARTS = ("sim", "independent")
+REGROUPINGS = 20  # random regroupings of each case's runs: one alone moves the rate by a few points
 
 
 def _flights(
@@ -79,12 +90,15 @@ def run_case(part: str, index: int, seed: int, fresh: int) -> dict[str, object]:
         if report["verdict"] != "effect":
             return result
         low, high = report["closure"]["fresh_data_interval"]
-        closures = [fresh_closure(diagnosis, spec_path, path) for path in new]
+        energies = [run_energies(diagnosis, spec_path, path) for path in new]
+    closures = [closure_of(np.sum(before), np.sum(after)) for before, after in energies]
     return result | {
         "reported": report["effect"],
         "closure_test": report["closure"]["realised_test"],
         "closure_fresh_data_interval": [low, high],
         "closure_fresh_flights": closures,
+        "fresh_run_energies_before": [before for before, _ in energies],
+        "fresh_run_energies_after": [after for _, after in energies],
         "below": sum(value < low for value in closures),
         "above": sum(value > high for value in closures),
     }
@@ -111,6 +125,107 @@ def summarise(results: list[dict[str, object]]) -> dict[str, object]:
         "cases_missing_every_fresh_flight": sum(
             r["below"] + r["above"] == len(r["closure_fresh_flights"]) for r in named
         ),
+    }
+
+
+def _pairs_inside(flights: list[tuple[np.ndarray, np.ndarray]], seed: int) -> tuple[int, int, int]:
+    """Every flight in turn gives the 90 % prediction interval (from its own runs) and every other
+    one is held against it: (pairs, below, above)."""
+    closures = [closure_of(np.sum(before), np.sum(after)) for before, after in flights]
+    pairs = below = above = 0
+    for giver, (before, after) in enumerate(flights):
+        low, high = fresh_data_interval(before, after, seed)
+        for other, closure in enumerate(closures):
+            if other != giver:
+                pairs += 1
+                below += closure < low
+                above += closure > high
+    return pairs, below, above
+
+
+def _regrouped(
+    flights: list[tuple[np.ndarray, np.ndarray]], generator: np.random.Generator
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The same runs dealt out at random into flights of the same sizes: runs as independent draws."""
+    before = np.concatenate([b for b, _ in flights])
+    after = np.concatenate([a for _, a in flights])
+    order = generator.permutation(len(before))
+    edges = np.cumsum([len(b) for b, _ in flights])[:-1]
+    return list(zip(np.split(before[order], edges), np.split(after[order], edges), strict=True))
+
+
+def intraclass_correlation(flights: list[tuple[np.ndarray, np.ndarray]]) -> float:
+    """One-way ANOVA estimate of the share of the run influences' variance that the runs of one
+    flight share (Fisher's intraclass correlation). A run's influence on the closure of all the
+    runs pooled is -(r / 2) N (a_i / A - b_i / B) (intervals.closures_and_standard_errors); a
+    fresh flight's closure varies (1 + (n - 1) ICC) times as much as its n runs, taken as
+    independent, make it (the design effect)."""
+    before = np.concatenate([b for b, _ in flights])
+    after = np.concatenate([a for _, a in flights])
+    ratio = np.sqrt(after.sum() / before.sum())
+    influence = -(ratio / 2) * len(before) * (after / after.sum() - before / before.sum())
+    groups = np.split(influence, np.cumsum([len(b) for b, _ in flights])[:-1])
+    sizes = np.array([len(g) for g in groups], dtype=float)
+    between = np.sum(sizes * (np.array([g.mean() for g in groups]) - influence.mean()) ** 2)
+    within = sum(np.sum((g - g.mean()) ** 2) for g in groups)
+    between_mean = between / (len(groups) - 1)
+    within_mean = within / (len(influence) - len(groups))
+    size = (len(influence) - np.sum(sizes**2) / len(influence)) / (len(groups) - 1)
+    return float((between_mean - within_mean) / (between_mean + (size - 1) * within_mean))
+
+
+def replay(results: list[dict[str, object]], seed: int) -> dict[str, object] | None:
+    """How the interval does when the fresh flights, scored with the diagnosis' model, give it in
+    turn: pairs inside as flown and with their runs regrouped at random (what the interval would do
+    if runs were independent draws), and the runs' intraclass correlation per case (the part of a
+    flight the interval cannot see from its own runs). None without two fresh flights a case."""
+    cases = [
+        list(
+            zip(
+                map(np.asarray, r["fresh_run_energies_before"]),
+                map(np.asarray, r["fresh_run_energies_after"]),
+                strict=True,
+            )
+        )
+        for r in results
+        if len(r.get("fresh_run_energies_before", ())) >= 2
+    ]
+    if not cases:
+        return None
+    generator = np.random.default_rng(seed)
+    flown = np.array([_pairs_inside(flights, seed) for flights in cases]).sum(axis=0)
+    regrouped = np.array(
+        [
+            _pairs_inside(_regrouped(flights, generator), seed)
+            for flights in cases
+            for _ in range(REGROUPINGS)
+        ]
+    ).sum(axis=0)
+    correlations = np.array([intraclass_correlation(flights) for flights in cases])
+    runs = np.mean([len(b) for flights in cases for b, _ in flights])
+
+    def rate(counts: np.ndarray) -> dict[str, object]:
+        pairs, below, above = (int(value) for value in counts)
+        return {
+            "pairs": pairs,
+            "inside": pairs - below - above,
+            "below": below,
+            "above": above,
+            "inside_rate": (pairs - below - above) / pairs,
+        }
+
+    return {
+        "cases": len(cases),
+        "as_flown": rate(flown),
+        "runs_regrouped_at_random": rate(regrouped),
+        "intraclass_correlation_median": float(np.median(correlations)),
+        "intraclass_correlation_mean": float(np.mean(correlations)),
+        "intraclass_correlation_standard_error": float(
+            np.std(correlations, ddof=1) / np.sqrt(len(correlations))
+        )
+        if len(correlations) > 1
+        else None,
+        "design_effect_at_mean": float(1.0 + (runs - 1.0) * np.mean(correlations)),
     }
 
 
@@ -199,13 +314,14 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
         "part": arguments.part,
         "seed": arguments.seed,
         "summary": summarise(results),
+        "replay": replay(results, arguments.seed),
         "results": results,
     }
     if arguments.out:
         arguments.out.write_text(json.dumps(to_jsonable(output), indent=1))
     if arguments.figure:
         fresh_flights_figure([to_jsonable(output)]).savefig(arguments.figure, dpi=120)
-    print(json.dumps(to_jsonable(output["summary"]), indent=1))
+    print(json.dumps(to_jsonable({key: output[key] for key in ("summary", "replay")}), indent=1))
     return output
 
 

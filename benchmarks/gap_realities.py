@@ -55,6 +55,7 @@ from ornitail.core.output import to_jsonable
 from ornitail.gap.benchmark import draw_case as draw_sim_case
 from ornitail.gap.benchmark import run_case as run_sim_case
 from ornitail.gap.derivative_candidates import DERIVATIVE_LEVEL_CANDIDATES
+from ornitail.gap.detection import closure_of
 from ornitail.gap.flight_diagnosis import (
     FlightDiagnosis,
     diagnose_flight,
@@ -102,14 +103,23 @@ def _outcome(
     return result
 
 
-def fresh_closure(diagnosis: FlightDiagnosis, spec_path: Path, log_path: Path) -> float:
-    """Closure of the diagnosis' chosen model on another flight (its own channel weights)."""
+def run_energies(
+    diagnosis: FlightDiagnosis, spec_path: Path, log_path: Path
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each run's residual energy on another flight (summed over channels, each divided by the
+    diagnosis' channel weight) under the baseline and under the diagnosis' chosen model."""
     runs = read_record(read_baseline_spec(spec_path), [log_path]).runs
 
-    def energy(model) -> float:
-        return float(sum(np.sum((r / diagnosis.weights) ** 2) for r in residuals_of(model, runs)))
+    def energies(model) -> np.ndarray:
+        return np.array([np.sum((r / diagnosis.weights) ** 2) for r in residuals_of(model, runs)])
 
-    return 1.0 - float(np.sqrt(energy(diagnosis.chosen) / energy(diagnosis.baseline)))
+    return energies(diagnosis.baseline), energies(diagnosis.chosen)
+
+
+def fresh_closure(diagnosis: FlightDiagnosis, spec_path: Path, log_path: Path) -> float:
+    """Closure of the diagnosis' chosen model on another flight (its own channel weights)."""
+    before, after = run_energies(diagnosis, spec_path, log_path)
+    return closure_of(before.sum(), after.sum())
 
 
 def _within(result: dict[str, object], fresh: float) -> None:

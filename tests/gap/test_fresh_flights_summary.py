@@ -3,8 +3,9 @@ case results, and its refusals: every count is exact, so the bookkeeping is chec
 
 import json
 
+import numpy as np
 import pytest
-from fresh_flights import fresh_flights_figure, main, summarise
+from fresh_flights import fresh_flights_figure, intraclass_correlation, main, replay, summarise
 from gap_realities import wilson_interval
 
 
@@ -129,3 +130,50 @@ def test_the_figure_draws_each_cases_interval_test_closure_and_fresh_flights_red
     picture = tmp_path / "cases.png"
     main(["--draw", str(saved), "--figure", str(picture)])
     assert picture.read_bytes().startswith(b"\x89PNG")
+
+
+def flights_of(generator, count, shared_spread):
+    """``count`` flights of 16 runs: noise energy gamma(2) per run, times one lognormal factor per
+    flight (``shared_spread``: its log's standard deviation), and an effect of energy 1 per run that
+    the model removes (before = noise + 1, after = noise)."""
+    flights = []
+    for _ in range(count):
+        noise = generator.gamma(2.0, 1.0, 16) * np.exp(shared_spread * generator.standard_normal())
+        flights.append((noise + 1.0, noise))
+    return flights
+
+
+def test_intraclass_correlation_sees_a_factor_the_runs_of_a_flight_share():
+    # 40 flights: the estimate's spread with independent runs is about 0.012 (20 seeds), and a
+    # shared factor of spread 0.5 gives 0.29 +- 0.05, so both bounds sit near four spreads away
+    independent = intraclass_correlation(flights_of(np.random.default_rng(7), 40, 0.0))
+    shared = intraclass_correlation(flights_of(np.random.default_rng(7), 40, 0.5))
+    assert abs(independent) < 0.05
+    assert shared > 0.1
+
+
+def test_replay_holds_every_flight_against_every_other_ones_interval():
+    generator = np.random.default_rng(3)
+    usual = flights_of(generator, 1, 0.0)[0]
+    odd = (usual[0] * 4.0, usual[1])  # the same noise beside an effect of 4x the energy
+    result = {
+        "fresh_run_energies_before": [usual[0], usual[0], odd[0]],
+        "fresh_run_energies_after": [usual[1], usual[1], odd[1]],
+    }
+    summary = replay([result, {"expected": None, "verdict": "none"}], seed=5)
+    # two identical flights hold each other; the odd one closes far above their intervals and
+    # each of them far below its interval
+    assert summary["cases"] == 1
+    assert summary["as_flown"] == {
+        "pairs": 6,
+        "inside": 2,
+        "below": 2,
+        "above": 2,
+        "inside_rate": pytest.approx(2 / 6),
+    }
+    assert summary["runs_regrouped_at_random"]["pairs"] == 6 * 20
+
+
+def test_replay_needs_two_fresh_flights_in_a_case():
+    one = {"fresh_run_energies_before": [np.ones(16)], "fresh_run_energies_after": [np.ones(16)]}
+    assert replay([one, {"expected": None, "verdict": "none"}], seed=1) is None
