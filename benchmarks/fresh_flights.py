@@ -147,11 +147,18 @@ def _regrouped(
     flights: list[tuple[np.ndarray, np.ndarray]], generator: np.random.Generator
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """The same runs dealt out at random into flights of the same sizes: runs as independent draws."""
+    before, after, edges = _pooled(flights)
+    order = generator.permutation(len(before))
+    return list(zip(np.split(before[order], edges), np.split(after[order], edges), strict=True))
+
+
+def _pooled(
+    flights: list[tuple[np.ndarray, np.ndarray]],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every flight's runs in one row (before, after) and where each flight ends in it (np.split)."""
     before = np.concatenate([b for b, _ in flights])
     after = np.concatenate([a for _, a in flights])
-    order = generator.permutation(len(before))
-    edges = np.cumsum([len(b) for b, _ in flights])[:-1]
-    return list(zip(np.split(before[order], edges), np.split(after[order], edges), strict=True))
+    return before, after, np.cumsum([len(b) for b, _ in flights])[:-1]
 
 
 def intraclass_correlation(flights: list[tuple[np.ndarray, np.ndarray]]) -> float:
@@ -160,11 +167,10 @@ def intraclass_correlation(flights: list[tuple[np.ndarray, np.ndarray]]) -> floa
     runs pooled is -(r / 2) N (a_i / A - b_i / B) (intervals.closures_and_standard_errors); a
     fresh flight's closure varies (1 + (n - 1) ICC) times as much as its n runs, taken as
     independent, make it (the design effect)."""
-    before = np.concatenate([b for b, _ in flights])
-    after = np.concatenate([a for _, a in flights])
+    before, after, edges = _pooled(flights)
     ratio = np.sqrt(after.sum() / before.sum())
     influence = -(ratio / 2) * len(before) * (after / after.sum() - before / before.sum())
-    groups = np.split(influence, np.cumsum([len(b) for b, _ in flights])[:-1])
+    groups = np.split(influence, edges)
     sizes = np.array([len(g) for g in groups], dtype=float)
     between = np.sum(sizes * (np.array([g.mean() for g in groups]) - influence.mean()) ** 2)
     within = sum(np.sum((g - g.mean()) ** 2) for g in groups)
