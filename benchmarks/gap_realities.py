@@ -26,7 +26,8 @@ interval (``rate_intervals_95``): with 4 effect-free flights a seed, one false a
 interval of 0.05-0.70.
 
 ``python benchmarks/gap_realities.py [--sim-cases 10] [--independent-cases 12] [--seed 2018]
-[--out result.json] [--validation first-fold] [--null-directions any]``
+[--out result.json] [--validation first-fold] [--null-directions any]
+[--validation-weighting winsorised]``
 
 ``python benchmarks/gap_realities.py --combine a.json b.json ... [--out pooled.json]`` pools the cases
 of earlier results (each seed's part once: a seed run as two processes, one per part, writes its
@@ -66,6 +67,7 @@ from ornitail.gap.model_spec import (
     FLIGHT_NULL_DIRECTIONS,
     NULL_DIRECTIONS,
     VALIDATION_DESIGNS,
+    VALIDATION_WEIGHTINGS,
     BaselineSpec,
     read_baseline_spec,
 )
@@ -131,7 +133,8 @@ def _within(result: dict[str, object], fresh: float) -> None:
 
 
 def _spec(path: Path, design: dict[str, str]) -> BaselineSpec:
-    """The baseline file at ``path`` with ``design``'s keys set (``validation``, ``null_directions``)."""
+    """The baseline file at ``path`` with ``design``'s keys set (``validation``, ``null_directions``,
+    ``validation_weighting``)."""
     return dataclasses.replace(read_baseline_spec(path), **design)
 
 
@@ -315,23 +318,29 @@ def summarise(results: list[dict[str, object]]) -> dict[str, object]:
 
 
 def combine(paths: list[Path]) -> dict[str, object]:
-    """Earlier results (``--out`` files, all of one design: validation and null directions) pooled:
+    """Earlier results (``--out`` files, all of one design: validation, null directions and
+    validation weighting) pooled:
     per part, each seed's cases once (the longest list any file holds for that seed: a seed's parts
     run as separate processes each carry the same semi-real cases), scored by :func:`summarise`."""
     by_part: dict[str, dict[int, list]] = {}
-    designs: dict[tuple[str, str], Path] = {}
+    designs: dict[tuple[str, str, str], Path] = {}
     for path in paths:
         try:
             result = json.loads(path.read_text())
             seed, parts = int(result["seed"]), result["results"]
-            design = (result["validation"], result.get("null_directions", "any"))
+            design = (
+                result["validation"],
+                result.get("null_directions", "any"),
+                result.get("validation_weighting", "none"),
+            )
         except (OSError, ValueError, KeyError, TypeError) as error:
             raise SystemExit(f"{path}: not a gap_realities result file ({error})") from None
         designs.setdefault(design, path)
         if len(designs) > 1:
             other = next(where for kept, where in designs.items() if kept != design)
             raise SystemExit(
-                f"{path}: validation {design[0]!r}, null_directions {design[1]!r}; {other} differs: "
+                f"{path}: validation {design[0]!r}, null_directions {design[1]!r}, "
+                f"validation_weighting {design[2]!r}; {other} differs: "
                 "results of different designs are not pooled"
             )
         for part, cases in parts.items():
@@ -342,10 +351,11 @@ def combine(paths: list[Path]) -> dict[str, object]:
         part: [case for cases in seeds.values() for case in cases]
         for part, seeds in by_part.items()
     }
-    (validation, null_directions), *_ = designs
+    (validation, null_directions, weighting), *_ = designs
     return {
         "validation": validation,
         "null_directions": null_directions,
+        "validation_weighting": weighting,
         "seeds": {
             part: sorted(s for s, cases in seeds.items() if cases)
             for part, seeds in by_part.items()
@@ -372,7 +382,13 @@ def figure_title(design: dict[str, str], seeds: dict[str, list[int]]) -> str:
     )
     return (
         f"gap diagnosis on three realities, null directions {design['null_directions']}, "
-        f"validation {design['validation']}\nseeds: {parts}"
+        f"validation {design['validation']}"
+        + (
+            f", validation runs {design['validation_weighting']}"
+            if design.get("validation_weighting", "none") != "none"
+            else ""
+        )
+        + f"\nseeds: {parts}"
     )
 
 
@@ -404,6 +420,12 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
         help="the baseline files' [baseline].null_directions (default: %(default)s)",
     )
     parser.add_argument(
+        "--validation-weighting",
+        choices=VALIDATION_WEIGHTINGS,
+        default="none",
+        help="the baseline files' [baseline].validation_weighting (not yet the default: %(default)s)",
+    )
+    parser.add_argument(
         "--combine", type=Path, nargs="+", metavar="RESULT", help="pool earlier --out files"
     )
     parser.add_argument(
@@ -428,7 +450,11 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
     def tick(what: str) -> None:
         print(f"[{time.monotonic() - started:7.1f} s] {what}", file=sys.stderr, flush=True)
 
-    design = {"validation": arguments.validation, "null_directions": arguments.null_directions}
+    design = {
+        "validation": arguments.validation,
+        "null_directions": arguments.null_directions,
+        "validation_weighting": arguments.validation_weighting,
+    }
     parts = {
         "semi_real": semi_real_part(arguments.seed, tick, design),
         "independent": independent_part(arguments.independent_cases, arguments.seed, tick, design),

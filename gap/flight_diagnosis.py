@@ -68,6 +68,7 @@ from ornitail.gap.null_response import response_gradients
 from ornitail.gap.pooled_validation import FoldScores, pool_folds
 from ornitail.gap.ranking import CandidateEvidence, Ranking, rank_candidates
 from ornitail.gap.report import assemble_report, magnitude_field
+from ornitail.gap.validation_weighting import validation_run_weights, weighted_scores
 
 DEFAULT_SEED = 2018
 NULL_BOUNDS = (-1.0, 1.0)  # magnitude of a null direction: relative change of A and B entries
@@ -225,12 +226,12 @@ def null_energies(
     draws: int = NULL_DRAWS,
     named_steps: Sequence[np.ndarray] = (),
     response_gradients: Sequence[np.ndarray] = (),
-) -> tuple[float, np.ndarray]:
-    """``start``'s weighted squared residual on the ``validation`` runs, and each of ``draws``
-    random directions' in A and B (:mod:`ornitail.gap.detection`; orthogonal to ``named_steps``
-    and to ``response_gradients``) fitted on the ``training`` runs within :data:`NULL_BOUNDS`
-    (channels divided by ``scales``, SI per channel)."""
-    start_sse = float(_channel_sse(residuals_of(start, validation), scales).sum())
+) -> tuple[np.ndarray, np.ndarray]:
+    """``start``'s weighted squared residual on each ``validation`` run (runs,), and each of
+    ``draws`` random directions' in A and B (:mod:`ornitail.gap.detection`; orthogonal to
+    ``named_steps`` and to ``response_gradients``) fitted on the ``training`` runs within
+    :data:`NULL_BOUNDS` (draws, runs) (channels divided by ``scales``, SI per channel)."""
+    start_sse = _channel_sse(residuals_of(start, validation), scales).sum(axis=1)
     after = []
     for a_step, b_step in random_matrix_directions(
         start.a_matrix,
@@ -246,8 +247,8 @@ def null_energies(
             return start.with_matrices(start.a_matrix + k * a_step, start.b_matrix + k * b_step)
 
         _, model = _fit(family, NULL_BOUNDS, training, scales)
-        after.append(float(_channel_sse(residuals_of(model, validation), scales).sum()))
-    return start_sse, np.array(after)
+        after.append(_channel_sse(residuals_of(model, validation), scales).sum(axis=1))
+    return start_sse, np.reshape(after, (draws, len(validation)))
 
 
 def library_matrix_steps(library: Sequence[FlightCandidate]) -> list[np.ndarray]:
@@ -266,14 +267,16 @@ def library_matrix_steps(library: Sequence[FlightCandidate]) -> list[np.ndarray]
 
 
 def rule_from_energies(
-    start_sse: float, after_sse: np.ndarray, orthogonal_to: str = ""
+    start_sse: np.ndarray, after_sse: np.ndarray, orthogonal_to: str = ""
 ) -> DetectionRule:
-    """The rule whose null closures are the directions' (``after_sse``) against ``start_sse``;
-    ``orthogonal_to`` names the changes the directions were stripped of (empty: none)."""
+    """The rule whose null closures are the directions' (``after_sse``, draws x runs) against
+    ``start_sse`` (runs,), each summed over the runs; ``orthogonal_to`` names the changes the
+    directions were stripped of (empty: none)."""
     method = NULL_METHOD.format(draws=len(after_sse))
     if orthogonal_to:
         method += f", each orthogonal to {orthogonal_to}"
-    closures = np.array([closure_of(start_sse, after) for after in after_sse])
+    total = float(np.sum(start_sse))
+    closures = np.array([closure_of(total, float(np.sum(after))) for after in after_sse])
     return DetectionRule(method, closures, orthogonal_to)
 
 
@@ -282,7 +285,7 @@ def _ranked_with_rule(
     library: Sequence[FlightCandidate],
     design: str,
     named_steps: Sequence[np.ndarray],
-    null_of: Callable[[Sequence[FlightCandidate]], tuple[float, np.ndarray]],
+    null_of: Callable[[Sequence[FlightCandidate]], tuple[np.ndarray, np.ndarray]],
     seed: int,
     bonferroni_t: bool,
 ) -> tuple[Ranking, DetectionRule]:
@@ -317,7 +320,7 @@ def _null_stripped_of(
     effects: Sequence[tuple[Callable[[float], LinearFlightModel], float]],
     part: _Split,
     seed: int,
-) -> tuple[float, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray]:
     """:func:`null_energies` on one fold's runs, the directions stripped of the first-order output
     responses of ``effects`` ((family, reach) pairs, :func:`ornitail.gap.null_response.response_gradients`)."""
     gradients = response_gradients(start, effects, part.training, part.scales)
@@ -395,7 +398,7 @@ def _library_scores(
             named_steps=named_steps,
         )
         if calibrate
-        else (0.0, np.zeros(0))
+        else (np.zeros(0), np.zeros((0, 0)))
     )
     scores = FoldScores(
         evidence=evidence,
@@ -553,14 +556,18 @@ def diagnose_flight(
         fold_splits.append(fold_split)
         step(fold, f"fold {fold} of {len(splits)}: library fitted")
     deciding = pool_folds(fold_scores) if pooled else fold_scores[0]
+    run_weights = validation_run_weights(spec.validation_weighting, deciding.start_heldout_sse)
+    deciding = weighted_scores(deciding, run_weights)
 
-    def fold_null(members: Sequence[FlightCandidate]) -> tuple[float, np.ndarray]:
+    def fold_null(members: Sequence[FlightCandidate]) -> tuple[np.ndarray, np.ndarray]:
         effects = [(member.build, _reach(member)) for member in members]
         energies = [
             _null_stripped_of(baseline, effects, part, seed)
             for part in (fold_splits if pooled else fold_splits[:1])
         ]
-        return sum(start for start, _ in energies), np.sum([after for _, after in energies], axis=0)
+        start = np.concatenate([start for start, _ in energies])
+        after = np.concatenate([after for _, after in energies], axis=1)
+        return start * run_weights, after * run_weights
 
     ranking, rule = _ranked_with_rule(
         deciding, library, design, named_steps, fold_null, seed, pooled
@@ -573,7 +580,7 @@ def diagnose_flight(
         first = (next(c for c in library if c.name == top.name), top.magnitude)
         rest = [c for c in library if c.name not in ranking.top_set]
 
-        def second_null(members: Sequence[FlightCandidate]) -> tuple[float, np.ndarray]:
+        def second_null(members: Sequence[FlightCandidate]) -> tuple[np.ndarray, np.ndarray]:
             first_model = first[0].build(first[1])
             effects = [
                 (partial(_on_top_of, baseline, first_model, member), _reach(member))
@@ -635,7 +642,12 @@ def diagnose_flight(
         data_paths=data_paths,
         total_runs=len(runs),
         split=_split_field(splits, len(runs), pooled)
-        | {"test_choices": choices, "runs_cut_into": record.cut},
+        | {
+            "test_choices": choices,
+            "runs_cut_into": record.cut,
+            "validation_weighting": spec.validation_weighting,
+            "validation_runs_weighted_down": int(np.count_nonzero(run_weights < 1)),
+        },
         ranking=ranking,
         rule=rule,
         channels=channels,

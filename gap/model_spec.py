@@ -14,6 +14,7 @@ effects_off = ["added_mass"]    # simulator effects the baseline leaves out
 # null_directions = "any"        # flight: the detection rule's null directions as drawn (default
 #                                # "top-set-orthogonal": stripped of the best candidates' responses;
 #                                # "library-orthogonal": of every candidate's change; docs/gap-diagnosis.md)
+# validation_weighting = "winsorised"  # flight: cap a disturbed validation run's weight (not yet the default)
 ```
 
 ``tail`` and ``x_h_mm`` are required for the simulator and optional for a model file (they then
@@ -42,6 +43,9 @@ NULL_DIRECTIONS = ("any", "library-orthogonal", "top-set-orthogonal")
 stripped of their part along the changes the library's candidates make ("library-orthogonal"), or drawn after the
 ranking and stripped of the top set's candidates' first-order output responses ("top-set-orthogonal", the default:
 docs/gap-diagnosis.md)."""
+VALIDATION_WEIGHTINGS = ("none", "winsorised")
+"""How much each validation run counts (flight): by its energy ("none", the default), or with a run's energy
+capped at a multiple of the median run's ("winsorised", not yet the default: gap/validation_weighting.py)."""
 FLIGHT_NULL_DIRECTIONS = "top-set-orthogonal"
 """The flight diagnosis' null directions when the baseline file names none."""
 
@@ -63,20 +67,27 @@ class BaselineSpec:
     validation: str = "all-folds"  # one of VALIDATION_DESIGNS
     # one of NULL_DIRECTIONS; None: FLIGHT_NULL_DIRECTIONS (flight)
     null_directions: str | None = None
+    validation_weighting: str = "none"  # one of VALIDATION_WEIGHTINGS
 
     def __post_init__(self) -> None:
         if self.derivative_refit is None:
             object.__setattr__(self, "derivative_refit", self.kind == "linear_model")
 
 
-def require_flight_null_directions(spec: BaselineSpec, data: str) -> None:
-    """Refuse a ``null_directions`` other than "any" for ``data`` (tunnel or steady-state tables), whose null is
-    drawn from the configuration variables, not from a flight model's A and B."""
+def require_flight_only_keys(spec: BaselineSpec, data: str) -> None:
+    """Refuse the flight-only keys for ``data`` (tunnel or steady-state tables): a ``null_directions`` other than
+    "any" (their null is drawn from the configuration variables, not from a flight model's A and B) and a
+    ``validation_weighting`` other than "none" (their rule weighs points as they are)."""
     if spec.null_directions not in (None, "any"):
         raise UserInputError(
             f"{spec.source}: [baseline].null_directions",
             f"{spec.null_directions!r} is only for flight logs; {data} draw their null from the configuration "
             "variables",
+        )
+    if spec.validation_weighting != "none":
+        raise UserInputError(
+            f"{spec.source}: [baseline].validation_weighting",
+            f"{spec.validation_weighting!r} is only for flight logs; {data} weigh every point as it is",
         )
 
 
@@ -117,6 +128,7 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
             "derivative_refit",
             "validation",
             "null_directions",
+            "validation_weighting",
         ),
     )
     kind = table.text("kind", choices=BASELINE_KINDS)
@@ -131,6 +143,7 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
     refit = table.boolean("derivative_refit", None)
     validation = table.text("validation", "all-folds", choices=VALIDATION_DESIGNS)
     null_directions = table.text("null_directions", None, choices=NULL_DIRECTIONS)
+    weighting = table.text("validation_weighting", "none", choices=VALIDATION_WEIGHTINGS)
     for key, given in (("segment_s", segment_s is not None), ("derivative_refit", bool(refit))):
         if given and kind != "linear_model":
             raise UserInputError(table.where(key), "only for kind = linear_model (a model file)")
@@ -149,6 +162,7 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
         derivative_refit=refit,
         validation=validation,
         null_directions=null_directions,
+        validation_weighting=weighting,
         effects_off=_names(table, "effects_off", EFFECT_NAMES),
         model=model,
         candidates=_names(table, "candidates", None),
@@ -172,6 +186,8 @@ def write_baseline_spec(spec: BaselineSpec, path: str | Path) -> Path:
         lines.append(f'validation = "{spec.validation}"')
     if spec.null_directions is not None:
         lines.append(f'null_directions = "{spec.null_directions}"')
+    if spec.validation_weighting != "none":
+        lines.append(f'validation_weighting = "{spec.validation_weighting}"')
     if spec.model:
         lines.append(f'model = "{spec.model}"')
     if spec.candidates:

@@ -27,8 +27,9 @@ from ornitail.gap.ranking import CandidateEvidence
 class FoldScores:
     """One fold's library scores: each candidate's evidence (in library order), the start model's
     per-validation-run energies and training energy, its mean residual-input correlation on the
-    validation runs, the training samples, and the null directions' validation energies (draws,)
-    with the start model's total on the same runs (weighted squared residuals, dimensionless)."""
+    validation runs, the training samples, and the null directions' validation energies
+    (draws, runs) with the start model's (runs,) on the same runs (weighted squared residuals,
+    dimensionless)."""
 
     evidence: list[CandidateEvidence]
     start_heldout_sse: np.ndarray
@@ -36,13 +37,13 @@ class FoldScores:
     start_input_correlation: float
     training_count: int
     null_after_sse: np.ndarray
-    null_start_sse: float
+    null_start_sse: np.ndarray
 
 
 def pool_folds(folds: Sequence[FoldScores]) -> FoldScores:
     """Every fold's scores as one: validation runs' energies joined (candidates and start model),
     training energies and samples summed, input correlations averaged, the null directions'
-    validation energies summed per direction (so each direction's closure is over every fold's
+    validation energies joined per direction (so each direction's closure is over every fold's
     validation runs, as a candidate's is); each candidate's magnitude and bounds are the first
     fold's fit (the one reported and carried to a second effect)."""
     evidence = []
@@ -66,6 +67,6 @@ def pool_folds(folds: Sequence[FoldScores]) -> FoldScores:
         start_training_sse=float(sum(fold.start_training_sse for fold in folds)),
         start_input_correlation=float(np.mean([fold.start_input_correlation for fold in folds])),
         training_count=int(sum(fold.training_count for fold in folds)),
-        null_after_sse=np.sum([fold.null_after_sse for fold in folds], axis=0),
-        null_start_sse=float(sum(fold.null_start_sse for fold in folds)),
+        null_after_sse=np.concatenate([fold.null_after_sse for fold in folds], axis=1),
+        null_start_sse=np.concatenate([fold.null_start_sse for fold in folds]),
     )

@@ -43,7 +43,7 @@ from ornitail.gap.linear_candidates import (
     nested_test,
     rank_linear_candidates,
 )
-from ornitail.gap.model_spec import BaselineSpec, require_flight_null_directions
+from ornitail.gap.model_spec import BaselineSpec, require_flight_only_keys
 from ornitail.gap.plots import steady_residual_picture
 from ornitail.gap.report import assemble_report
 from ornitail.gap.sparse_regression import sparse_terms
@@ -186,7 +186,7 @@ def diagnose_steady(spec: BaselineSpec, path: Path, seed: int) -> SteadyDiagnosi
         raise UserInputError(
             f"{spec.source}: [baseline].kind", "steady-state tables need a simulator baseline"
         )
-    require_flight_null_directions(spec, "steady-state tables")
+    require_flight_only_keys(spec, "steady-state tables")
     rows = read_steady_table(Path(path))
     channels = tuple(c for c in CHANNELS if c in rows.columns)
     keep = [CHANNELS.index(c) for c in channels]

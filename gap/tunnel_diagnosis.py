@@ -38,7 +38,7 @@ from ornitail.gap.linear_candidates import (
     nested_test,
     rank_linear_candidates,
 )
-from ornitail.gap.model_spec import BaselineSpec, require_flight_null_directions
+from ornitail.gap.model_spec import BaselineSpec, require_flight_only_keys
 from ornitail.gap.plots import tunnel_residual_picture
 from ornitail.gap.report import assemble_report
 from ornitail.gap.sparse_regression import sparse_terms
@@ -147,7 +147,7 @@ def diagnose_tunnel(spec: BaselineSpec, paths: Sequence[Path], seed: int) -> Tun
         raise UserInputError(
             f"{spec.source}: [baseline].kind", "tunnel tables need a simulator baseline"
         )
-    require_flight_null_directions(spec, "tunnel tables")
+    require_flight_only_keys(spec, "tunnel tables")
     points = read_tunnel_points(list(paths))
     measured = points[list(LOAD_COLUMNS)].to_numpy(float)
     effects = EffectSet().without(*spec.effects_off)

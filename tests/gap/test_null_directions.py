@@ -13,7 +13,7 @@ from ornitail.gap.model_spec import (
     NULL_DIRECTIONS,
     BaselineSpec,
     read_baseline_spec,
-    require_flight_null_directions,
+    require_flight_only_keys,
     write_baseline_spec,
 )
 from ornitail.gap.steady_diagnosis import diagnose_steady
@@ -88,7 +88,7 @@ def test_the_baseline_file_takes_null_directions_and_refuses_other_values(tmp_pa
     assert plain.null_directions is None
     assert "null_directions" not in (tmp_path / "p.toml").read_text()
     assert FLIGHT_NULL_DIRECTIONS in NULL_DIRECTIONS
-    require_flight_null_directions(plain, "tunnel tables")  # the default is no refusal for tables
+    require_flight_only_keys(plain, "tunnel tables")  # the default is no refusal for tables
     bad = tmp_path / "bad.toml"
     bad.write_text(
         '[baseline]\nkind = "simulator"\ntail = "S3"\nx_h_mm = 98\nnull_directions = "orthogonal"\n'

@@ -13,13 +13,13 @@ def _fold(candidate_sse, start_sse, null_after, null_start, magnitude, correlati
         CandidateEvidence("a", magnitude, "s", 1, np.array(candidate_sse), 3.0, correlation, (0, 1))
     ]
     return FoldScores(
-        evidence, np.array(start_sse), 10.0, 0.5, 100, np.array(null_after), null_start
+        evidence, np.array(start_sse), 10.0, 0.5, 100, np.array(null_after), np.array(null_start)
     )
 
 
 def test_pooled_scores_join_runs_sum_energies_and_keep_the_first_folds_fit():
-    first = _fold([1.0, 2.0], [4.0, 4.0], [6.0, 7.0], 8.0, 0.1, 0.2)
-    second = _fold([3.0], [9.0], [1.0, 8.0], 9.0, 0.3, 0.4)
+    first = _fold([1.0, 2.0], [4.0, 4.0], [[6.0, 1.0], [7.0, 2.0]], [4.0, 4.0], 0.1, 0.2)
+    second = _fold([3.0], [9.0], [[1.0], [8.0]], [9.0], 0.3, 0.4)
     pooled = pool_folds([first, second])
     (candidate,) = pooled.evidence
     np.testing.assert_array_equal(candidate.heldout_sse, [1.0, 2.0, 3.0])
@@ -27,7 +27,6 @@ def test_pooled_scores_join_runs_sum_energies_and_keep_the_first_folds_fit():
     assert (candidate.magnitude, candidate.bounds) == (0.1, (0, 1))  # the first fold's fit
     assert candidate.training_sse == 6.0 and candidate.input_correlation == pytest.approx(0.3)
     assert (pooled.start_training_sse, pooled.training_count) == (20.0, 200)
-    # each null direction's energies are summed over the folds, as a candidate's runs are joined:
-    # its pooled closure is 1 - sqrt((6 + 1) / (8 + 9)) and 1 - sqrt((7 + 8) / 17)
-    np.testing.assert_array_equal(pooled.null_after_sse, [7.0, 15.0])
-    assert pooled.null_start_sse == 17.0
+    # each null direction's per-run energies are joined over the folds, as a candidate's are
+    np.testing.assert_array_equal(pooled.null_after_sse, [[6.0, 1.0, 1.0], [7.0, 2.0, 8.0]])
+    np.testing.assert_array_equal(pooled.null_start_sse, [4.0, 4.0, 9.0])

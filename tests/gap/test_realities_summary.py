@@ -127,10 +127,21 @@ def test_results_of_different_designs_are_not_pooled(tmp_path):
         ),
     ]
     with pytest.raises(
-        SystemExit, match=r"orthogonal.json: .*'library-orthogonal'; .*any.json differs"
+        SystemExit, match=r"orthogonal.json: .*'library-orthogonal', .*; .*any.json differs"
     ):
         combine(files)
     assert combine(files[:1])["scores"]["sim"]["false_alarms_on_no_effect"] == "0 of 1"
+    winsorised = _result_file(
+        tmp_path / "winsorised.json",
+        3,
+        {"sim": [case(None, "none", None)]},
+        validation_weighting="winsorised",
+    )
+    with pytest.raises(
+        SystemExit,
+        match=r"winsorised.json: .*validation_weighting 'winsorised'; .*any.json differs",
+    ):
+        combine([files[0], winsorised])
 
 
 def test_a_file_that_is_not_a_result_is_named_in_one_line(tmp_path):
