@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from ornitail.gap.derivative_candidates import DERIVATIVE_LEVEL_CANDIDATES
+from ornitail.gap.validation_weighting import WINSORISED_RUN_ENERGY
 
 
 def _gap_line(label: str, gap: dict[str, Any]) -> str:
@@ -146,6 +147,13 @@ def render_report(report: dict[str, Any]) -> str:
         f"({rule['null_closures_median']:.3f}) and the materiality floor "
         f"{rule['materiality_floor']:.2f}",
     ]
+    if report["split"].get("validation_weighting", "none") != "none":
+        lines.append(
+            f"validation runs {report['split']['validation_weighting']}: "
+            f"{report['split']['validation_runs_weighted_down']} counted as {WINSORISED_RUN_ENERGY:g} x the "
+            "median run's energy "
+            "in the ranking and the rule (not yet the default; test closures unweighted)"
+        )
     if report["verdict"] == "effect":
         lines.append(
             f"effect: {report['effect']} (magnitude {magnitude_text(report['magnitude'])}), "
