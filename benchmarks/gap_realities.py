@@ -207,6 +207,9 @@ def independent_part(
 def semi_real_part(
     seed: int, tick: Callable[[str], None], design: dict[str, str]
 ) -> list[dict[str, object]]:
+    """The Twin Otter cases, diagnosed with ``design`` except its validation weighting: the record
+    is cut into segments, which winsorising refuses (gap/validation_weighting.py)."""
+    design = design | {"validation_weighting": "none"}
     results = []
     with tempfile.TemporaryDirectory(prefix="ornitail-gap-") as folder:
         model_file = semi_real.identified_model_file(Path(folder))

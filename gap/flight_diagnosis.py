@@ -68,7 +68,11 @@ from ornitail.gap.null_response import response_gradients
 from ornitail.gap.pooled_validation import FoldScores, pool_folds
 from ornitail.gap.ranking import CandidateEvidence, Ranking, rank_candidates
 from ornitail.gap.report import assemble_report, magnitude_field
-from ornitail.gap.validation_weighting import validation_run_weights, weighted_scores
+from ornitail.gap.validation_weighting import (
+    require_repeated_runs,
+    validation_run_weights,
+    weighted_scores,
+)
 
 DEFAULT_SEED = 2018
 NULL_BOUNDS = (-1.0, 1.0)  # magnitude of a null direction: relative change of A and B entries
@@ -513,6 +517,7 @@ def diagnose_flight(
     fold of the nested split, the second effect, the localisation), for a progress display.
     """
     record = read_record(spec, data_paths)
+    require_repeated_runs(spec, record.cut)
     runs = record.runs
     splits = nested_splits(len(runs), seed, ", ".join(str(path) for path in data_paths))
     total_steps = len(splits) + 2

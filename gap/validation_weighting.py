@@ -22,12 +22,27 @@ import dataclasses
 
 import numpy as np
 
+from ornitail.core.errors import UserInputError
+from ornitail.gap.model_spec import BaselineSpec
 from ornitail.gap.pooled_validation import FoldScores
 
 WINSORISED_RUN_ENERGY = 3.0
 """A validation run counts as at most this many times the median run's baseline energy. Set before
 measuring, not fitted: in the benchmark's flights 90 % of runs hold under 1.8 x the median theta
 energy and the strongly disturbed ones 4-9 x (docs/gap-diagnosis.md, *Closure on new data*)."""
+
+
+def require_repeated_runs(spec: BaselineSpec, cut: str) -> None:
+    """Refuse ``"winsorised"`` unless the runs are manoeuvres (``cut``, :class:`FlightRecord`): only
+    runs that repeat one input differ in energy by their disturbance; consecutive segments of one
+    record differ by how much the input excites them, and the most excited, the most informative,
+    would lose weight."""
+    if spec.validation_weighting != "none" and cut != "manoeuvres":
+        raise UserInputError(
+            f"{spec.source}: [baseline].validation_weighting",
+            f"{spec.validation_weighting!r} needs runs that repeat one manoeuvre; these runs are {cut} "
+            "of a record, which differ in how much the input excites them",
+        )
 
 
 def validation_run_weights(weighting: str, start_sse: np.ndarray) -> np.ndarray:

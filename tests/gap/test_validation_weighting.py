@@ -1,6 +1,8 @@
 """Winsorised validation runs (``[baseline].validation_weighting = "winsorised"``) on numbers
 worked by hand, and the rule they leave calibrated."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -11,6 +13,7 @@ from ornitail.gap.pooled_validation import FoldScores
 from ornitail.gap.ranking import CandidateEvidence
 from ornitail.gap.validation_weighting import (
     WINSORISED_RUN_ENERGY,
+    require_repeated_runs,
     validation_run_weights,
     weighted_scores,
 )
@@ -64,3 +67,14 @@ def test_validation_weighting_is_read_written_and_refused_for_tables(tmp_path):
     )
     with pytest.raises(UserInputError, match="validation_weighting"):
         read_baseline_spec(path)
+
+
+def test_winsorising_segments_of_one_record_is_refused_in_one_line():
+    spec = BaselineSpec(kind="linear_model", source="twin.toml", validation_weighting="winsorised")
+    with pytest.raises(
+        UserInputError, match=r"twin.toml: \[baseline\].validation_weighting"
+    ) as raised:
+        require_repeated_runs(spec, "segments of 2 s")
+    assert "\n" not in str(raised.value)
+    require_repeated_runs(spec, "manoeuvres")
+    require_repeated_runs(dataclasses.replace(spec, validation_weighting="none"), "segments of 2 s")
