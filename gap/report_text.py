@@ -150,9 +150,9 @@ def render_report(report: dict[str, Any]) -> str:
     if report["split"].get("validation_weighting", "none") != "none":
         lines.append(
             f"validation runs {report['split']['validation_weighting']}: "
-            f"{report['split']['validation_runs_weighted_down']} counted as {WINSORISED_RUN_ENERGY:g} x the "
-            "median run's energy "
-            "in the ranking and the rule (not yet the default; test closures unweighted)"
+            f"{report['split']['validation_runs_weighted_down']} of {runs['validation']} above "
+            f"{WINSORISED_RUN_ENERGY:g} x the median run's baseline energy, counted as that much in the "
+            "ranking and the rule (not yet the default; test closures unweighted)"
         )
     if report["verdict"] == "effect":
         lines.append(
