@@ -13,7 +13,8 @@ that energy, its energies after every candidate and every null direction by the 
 the run keeps its closure but not its weight. The weights depend only on the baseline's
 residuals, never on a candidate, so candidates and the null are scored alike and the rule stays
 calibrated on the same statistic. The closure on test runs and its intervals are not weighted:
-how far the gap shrinks is reported on every run as it is.
+how far the gap shrinks is reported on every run as it is. Nor is a second effect's search, which
+ranks on the first fold's validation runs alone.
 """
 
 from __future__ import annotations
