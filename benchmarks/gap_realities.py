@@ -383,15 +383,11 @@ def figure_title(design: dict[str, str], seeds: dict[str, list[int]]) -> str:
     parts = "; ".join(
         f"{name} {seed_ranges(seeds[part])}" for part, name in PARTS.items() if seeds.get(part)
     )
+    weighting = design.get("validation_weighting", "none")
+    runs = f", validation runs {weighting}" if weighting != "none" else ""
     return (
         f"gap diagnosis on three realities, null directions {design['null_directions']}, "
-        f"validation {design['validation']}"
-        + (
-            f", validation runs {design['validation_weighting']}"
-            if design.get("validation_weighting", "none") != "none"
-            else ""
-        )
-        + f"\nseeds: {parts}"
+        f"validation {design['validation']}{runs}\nseeds: {parts}"
     )
 
 

@@ -142,6 +142,9 @@ def test_results_of_different_designs_are_not_pooled(tmp_path):
         match=r"winsorised.json: .*validation_weighting 'winsorised'; .*any.json differs",
     ):
         combine([files[0], winsorised])
+    alone = combine([winsorised])
+    assert ", validation runs winsorised\n" in figure_title(alone, alone["seeds"])
+    assert "validation runs" not in figure_title(combine(files[:1]), {"sim": [1]})
 
 
 def test_a_file_that_is_not_a_result_is_named_in_one_line(tmp_path):

@@ -8,7 +8,12 @@ import pytest
 
 from ornitail.core.errors import UserInputError
 from ornitail.gap.flight_diagnosis import rule_from_energies
-from ornitail.gap.model_spec import BaselineSpec, read_baseline_spec, require_flight_only_keys
+from ornitail.gap.model_spec import (
+    BaselineSpec,
+    read_baseline_spec,
+    require_flight_only_keys,
+    write_baseline_spec,
+)
 from ornitail.gap.pooled_validation import FoldScores
 from ornitail.gap.ranking import CandidateEvidence
 from ornitail.gap.validation_weighting import (
@@ -59,6 +64,12 @@ def test_validation_weighting_is_read_written_and_refused_for_tables(tmp_path):
     )
     spec = read_baseline_spec(path)
     assert spec.validation_weighting == "winsorised"
+    written = write_baseline_spec(spec, tmp_path / "written.toml")
+    assert read_baseline_spec(written).validation_weighting == "winsorised"
+    plain = write_baseline_spec(
+        BaselineSpec(kind="simulator", tail="S3", x_h_mm=98.0), tmp_path / "p.toml"
+    )
+    assert "validation_weighting" not in plain.read_text()
     with pytest.raises(UserInputError, match="validation_weighting.*only for flight logs"):
         require_flight_only_keys(spec, "tunnel tables")
     require_flight_only_keys(BaselineSpec(kind="simulator"), "tunnel tables")
