@@ -384,10 +384,9 @@ def figure_title(design: dict[str, str], seeds: dict[str, list[int]]) -> str:
         f"{name} {seed_ranges(seeds[part])}" for part, name in PARTS.items() if seeds.get(part)
     )
     weighting = design.get("validation_weighting", "none")
-    runs = f", validation runs {weighting}" if weighting != "none" else ""
     return (
         f"gap diagnosis on three realities, null directions {design['null_directions']}, "
-        f"validation {design['validation']}{runs}\nseeds: {parts}"
+        f"validation {design['validation']}, validation runs {weighting}\nseeds: {parts}"
     )
 
 
@@ -421,8 +420,9 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
     parser.add_argument(
         "--validation-weighting",
         choices=VALIDATION_WEIGHTINGS,
-        default="none",
-        help="the baseline files' [baseline].validation_weighting (not yet the default: %(default)s)",
+        default="winsorised",
+        help="the baseline files' [baseline].validation_weighting (default: %(default)s, the diagnosis' "
+        'default for manoeuvres since stop 43; "none" the design before)',
     )
     parser.add_argument(
         "--combine", type=Path, nargs="+", metavar="RESULT", help="pool earlier --out files"

@@ -69,8 +69,8 @@ from ornitail.gap.pooled_validation import FoldScores, pool_folds
 from ornitail.gap.ranking import CandidateEvidence, Ranking, rank_candidates
 from ornitail.gap.report import assemble_report, magnitude_field
 from ornitail.gap.validation_weighting import (
-    require_repeated_runs,
     validation_run_weights,
+    validation_weighting_for,
     weighted_scores,
 )
 
@@ -517,7 +517,7 @@ def diagnose_flight(
     fold of the nested split, the second effect, the localisation), for a progress display.
     """
     record = read_record(spec, data_paths)
-    require_repeated_runs(spec, record.cut)
+    weighting = validation_weighting_for(spec, record.cut)
     runs = record.runs
     splits = nested_splits(len(runs), seed, ", ".join(str(path) for path in data_paths))
     total_steps = len(splits) + 2
@@ -561,7 +561,7 @@ def diagnose_flight(
         fold_splits.append(fold_split)
         step(fold, f"fold {fold} of {len(splits)}: library fitted")
     deciding = pool_folds(fold_scores) if pooled else fold_scores[0]
-    run_weights = validation_run_weights(spec.validation_weighting, deciding.start_heldout_sse)
+    run_weights = validation_run_weights(weighting, deciding.start_heldout_sse)
     deciding = weighted_scores(deciding, run_weights)
 
     def fold_null(members: Sequence[FlightCandidate]) -> tuple[np.ndarray, np.ndarray]:
@@ -650,7 +650,7 @@ def diagnose_flight(
         | {
             "test_choices": choices,
             "runs_cut_into": record.cut,
-            "validation_weighting": spec.validation_weighting,
+            "validation_weighting": weighting,
             "validation_runs_weighted_down": int(np.count_nonzero(run_weights < 1)),
         },
         ranking=ranking,

@@ -14,7 +14,8 @@ effects_off = ["added_mass"]    # simulator effects the baseline leaves out
 # null_directions = "any"        # flight: the detection rule's null directions as drawn (default
 #                                # "top-set-orthogonal": stripped of the best candidates' responses;
 #                                # "library-orthogonal": of every candidate's change; docs/gap-diagnosis.md)
-# validation_weighting = "winsorised"  # flight: cap a disturbed validation run's weight (not yet the default)
+# validation_weighting = "none"  # flight: every validation run by its energy (default for manoeuvres
+#                                # "winsorised": a disturbed run counts as at most 3 x the median run's)
 ```
 
 ``tail`` and ``x_h_mm`` are required for the simulator and optional for a model file (they then
@@ -44,8 +45,9 @@ stripped of their part along the changes the library's candidates make ("library
 ranking and stripped of the top set's candidates' first-order output responses ("top-set-orthogonal", the default:
 docs/gap-diagnosis.md)."""
 VALIDATION_WEIGHTINGS = ("none", "winsorised")
-"""How much each validation run counts (flight): by its energy ("none", the default), or with a run's energy
-capped at a multiple of the median run's ("winsorised", not yet the default: gap/validation_weighting.py)."""
+"""How much each validation run counts (flight): by its energy ("none"), or with a run's energy capped at a
+multiple of the median run's ("winsorised", the default for manoeuvres since stop 43; segments get "none":
+gap/validation_weighting.py)."""
 FLIGHT_NULL_DIRECTIONS = "top-set-orthogonal"
 """The flight diagnosis' null directions when the baseline file names none."""
 
@@ -67,7 +69,8 @@ class BaselineSpec:
     validation: str = "all-folds"  # one of VALIDATION_DESIGNS
     # one of NULL_DIRECTIONS; None: FLIGHT_NULL_DIRECTIONS (flight)
     null_directions: str | None = None
-    validation_weighting: str = "none"  # one of VALIDATION_WEIGHTINGS
+    # one of VALIDATION_WEIGHTINGS; None: winsorised for manoeuvres, none for segments (flight)
+    validation_weighting: str | None = None
 
     def __post_init__(self) -> None:
         if self.derivative_refit is None:
@@ -84,7 +87,7 @@ def require_flight_only_keys(spec: BaselineSpec, data: str) -> None:
             f"{spec.null_directions!r} is only for flight logs; {data} draw their null from the configuration "
             "variables",
         )
-    if spec.validation_weighting != "none":
+    if spec.validation_weighting not in (None, "none"):
         raise UserInputError(
             f"{spec.source}: [baseline].validation_weighting",
             f"{spec.validation_weighting!r} is only for flight logs; {data} weigh every point as it is",
@@ -143,7 +146,7 @@ def read_baseline_spec(path: str | Path) -> BaselineSpec:
     refit = table.boolean("derivative_refit", None)
     validation = table.text("validation", "all-folds", choices=VALIDATION_DESIGNS)
     null_directions = table.text("null_directions", None, choices=NULL_DIRECTIONS)
-    weighting = table.text("validation_weighting", "none", choices=VALIDATION_WEIGHTINGS)
+    weighting = table.text("validation_weighting", None, choices=VALIDATION_WEIGHTINGS)
     for key, given in (("segment_s", segment_s is not None), ("derivative_refit", bool(refit))):
         if given and kind != "linear_model":
             raise UserInputError(table.where(key), "only for kind = linear_model (a model file)")
@@ -186,7 +189,7 @@ def write_baseline_spec(spec: BaselineSpec, path: str | Path) -> Path:
         lines.append(f'validation = "{spec.validation}"')
     if spec.null_directions is not None:
         lines.append(f'null_directions = "{spec.null_directions}"')
-    if spec.validation_weighting != "none":
+    if spec.validation_weighting is not None:
         lines.append(f'validation_weighting = "{spec.validation_weighting}"')
     if spec.model:
         lines.append(f'model = "{spec.model}"')

@@ -1,15 +1,16 @@
 """How much each validation run counts in the ranking and the detection rule
 (``[baseline].validation_weighting``; flight logs).
 
-``"none"`` (the default): every run counts by its energy, and the closure is the ratio of the
-summed energies after and before. A run holding a strong disturbance that no candidate explains
-(4-5 x the median run's energy in the benchmark's missed effects) adds the same to both sums and
-dilutes every candidate's closure towards 0, and it widens the bootstrap's spread, so a real effect
-can fall under the materiality floor (docs/gap-diagnosis.md, *Detection limits*).
+``"none"`` (segments of a record, and the design until stop 43): every run counts by its
+energy, and the closure is the ratio of the summed energies after and before. A run holding a
+strong disturbance that no candidate explains (4-5 x the median run's energy in the benchmark's
+missed effects) adds the same to both sums and dilutes every candidate's closure towards 0, and it
+widens the bootstrap's spread, so a real effect can fall under the materiality floor
+(docs/gap-diagnosis.md, *Detection limits*).
 
-``"winsorised"`` (not yet the default: measured on 8 of the benchmark's 16 simulator seeds and 11
-of flapper B's, docs/gap-diagnosis.md, *Winsorised validation runs*): a validation run whose
-baseline energy exceeds :data:`WINSORISED_RUN_ENERGY` times the median run's is scaled down to
+``"winsorised"`` (the default for manoeuvres since stop 43, measured on all 16 of the benchmark's
+simulator seeds and flapper B's: docs/gap-diagnosis.md, *Winsorised validation runs*): a
+validation run whose baseline energy exceeds :data:`WINSORISED_RUN_ENERGY` times the median run's is scaled down to
 that energy, its energies after every candidate and every null direction by the same factor, so
 the run keeps its closure but not its weight. The weights depend only on the baseline's
 residuals, never on a candidate, so candidates and the null are scored alike and the rule stays
@@ -34,17 +35,22 @@ measuring, not fitted: in the benchmark's flights 90 % of runs hold under 1.8 x 
 energy and the strongly disturbed ones 4-9 x (docs/gap-diagnosis.md, *Closure on new data*)."""
 
 
-def require_repeated_runs(spec: BaselineSpec, cut: str) -> None:
-    """Refuse ``"winsorised"`` unless the runs are manoeuvres (``cut``, :class:`FlightRecord`): only
-    runs that repeat one input differ in energy by their disturbance; consecutive segments of one
-    record differ by how much the input excites them, and the most excited, the most informative,
-    would lose weight."""
-    if spec.validation_weighting != "none" and cut != "manoeuvres":
+def validation_weighting_for(spec: BaselineSpec, cut: str) -> str:
+    """The weighting the runs get: the baseline file's, or when it names none ``"winsorised"`` for
+    manoeuvres (``cut``, :class:`FlightRecord`) and ``"none"`` for segments. ``"winsorised"`` is
+    refused for segments: only runs that repeat one input differ in energy by their disturbance;
+    consecutive segments of one record differ by how much the input excites them, and the most
+    excited, the most informative, would lose weight."""
+    repeated = cut == "manoeuvres"
+    if spec.validation_weighting is None:
+        return "winsorised" if repeated else "none"
+    if spec.validation_weighting != "none" and not repeated:
         raise UserInputError(
             f"{spec.source}: [baseline].validation_weighting",
             f"{spec.validation_weighting!r} needs runs that repeat one manoeuvre; these runs are {cut} "
             "of a record, which differ in how much the input excites them",
         )
+    return spec.validation_weighting
 
 
 def validation_run_weights(weighting: str, start_sse: np.ndarray) -> np.ndarray:

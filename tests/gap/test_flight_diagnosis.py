@@ -38,7 +38,7 @@ def _diagnosis(
     candidates: tuple[str, ...] = (),
     validation: str = "all-folds",
     null_directions: str | None = None,
-    validation_weighting: str = "none",
+    validation_weighting: str | None = None,
 ) -> FlightDiagnosis:
     """``case``'s baseline (with these settings, written to ``folder``) diagnosed on ``log``."""
     spec = dataclasses.replace(
@@ -241,9 +241,10 @@ def test_winsorised_validation_runs_take_the_weight_off_a_disturbed_manoeuvre(fl
             candidates=candidates,
             validation_weighting=weighting,
         ).report
-        for weighting in ("none", "winsorised")
+        for weighting in ("none", None)  # None: the file names none, the default
     }
-    plain, winsorised = reports["none"], reports["winsorised"]
+    plain, winsorised = reports["none"], reports[None]
+    assert winsorised["split"]["validation_weighting"] == "winsorised"
     assert plain["split"]["validation_runs_weighted_down"] == 0
     assert winsorised["split"]["validation_runs_weighted_down"] >= 1
     assert "validation runs winsorised: " in render_report(winsorised)

@@ -144,7 +144,8 @@ def test_results_of_different_designs_are_not_pooled(tmp_path):
         combine([files[0], winsorised])
     alone = combine([winsorised])
     assert ", validation runs winsorised\n" in figure_title(alone, alone["seeds"])
-    assert "validation runs" not in figure_title(combine(files[:1]), {"sim": [1]})
+    # a file from before the key existed was diagnosed with every run by its energy
+    assert ", validation runs none\n" in figure_title(combine(files[:1]), {"sim": [1]})
 
 
 def test_a_file_that_is_not_a_result_is_named_in_one_line(tmp_path):
@@ -190,7 +191,8 @@ def test_combine_draws_the_figure_titled_with_each_parts_seeds(tmp_path):
     assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert seed_ranges([2024, 2018, 2020, 2019]) == "2018-2020, 2024"
     assert figure_title(pooled, pooled["seeds"]) == (
-        "gap diagnosis on three realities, null directions any, validation all-folds\n"
+        "gap diagnosis on three realities, null directions any, validation all-folds, "
+        "validation runs none\n"
         "seeds: simulator 2018-2020, 2024"
     )
 

@@ -18,8 +18,8 @@ from ornitail.gap.pooled_validation import FoldScores
 from ornitail.gap.ranking import CandidateEvidence
 from ornitail.gap.validation_weighting import (
     WINSORISED_RUN_ENERGY,
-    require_repeated_runs,
     validation_run_weights,
+    validation_weighting_for,
     weighted_scores,
 )
 
@@ -70,6 +70,13 @@ def test_validation_weighting_is_read_written_and_refused_for_tables(tmp_path):
         BaselineSpec(kind="simulator", tail="S3", x_h_mm=98.0), tmp_path / "p.toml"
     )
     assert "validation_weighting" not in plain.read_text()
+    assert read_baseline_spec(plain).validation_weighting is None
+    none = dataclasses.replace(spec, validation_weighting="none")
+    assert (
+        read_baseline_spec(write_baseline_spec(none, tmp_path / "n.toml")).validation_weighting
+        == "none"
+    )
+    require_flight_only_keys(none, "tunnel tables")
     with pytest.raises(UserInputError, match="validation_weighting.*only for flight logs"):
         require_flight_only_keys(spec, "tunnel tables")
     require_flight_only_keys(BaselineSpec(kind="simulator"), "tunnel tables")
@@ -80,12 +87,17 @@ def test_validation_weighting_is_read_written_and_refused_for_tables(tmp_path):
         read_baseline_spec(path)
 
 
-def test_winsorising_segments_of_one_record_is_refused_in_one_line():
-    spec = BaselineSpec(kind="linear_model", source="twin.toml", validation_weighting="winsorised")
+def test_manoeuvres_are_winsorised_by_default_and_segments_never():
+    unnamed = BaselineSpec(kind="linear_model", source="twin.toml")
+    assert validation_weighting_for(unnamed, "manoeuvres") == "winsorised"
+    assert validation_weighting_for(unnamed, "segments of 2 s") == "none"
+    plain = dataclasses.replace(unnamed, validation_weighting="none")
+    assert validation_weighting_for(plain, "manoeuvres") == "none"
+    assert validation_weighting_for(plain, "segments of 2 s") == "none"
+    named = dataclasses.replace(unnamed, validation_weighting="winsorised")
+    assert validation_weighting_for(named, "manoeuvres") == "winsorised"
     with pytest.raises(
         UserInputError, match=r"twin.toml: \[baseline\].validation_weighting"
     ) as raised:
-        require_repeated_runs(spec, "segments of 2 s")
+        validation_weighting_for(named, "segments of 2 s")
     assert "\n" not in str(raised.value)
-    require_repeated_runs(spec, "manoeuvres")
-    require_repeated_runs(dataclasses.replace(spec, validation_weighting="none"), "segments of 2 s")
