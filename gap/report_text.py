@@ -152,7 +152,7 @@ def render_report(report: dict[str, Any]) -> str:
             f"validation runs {report['split']['validation_weighting']}: "
             f"{report['split']['validation_runs_weighted_down']} of {runs['validation']} above "
             f"{WINSORISED_RUN_ENERGY:g} x the median run's baseline energy, counted as that much in the "
-            "ranking and the rule (not yet the default; test closures unweighted)"
+            "ranking and the rule (test closures unweighted)"
         )
     if report["verdict"] == "effect":
         lines.append(
