@@ -87,6 +87,10 @@ class FlightRun:
         return self.inputs[:, self.excitation_index]
 
 
+MANOEUVRES_CUT = "manoeuvres"
+""":attr:`FlightRecord.cut` of runs that each repeat one manoeuvre (not segments of one record)."""
+
+
 @dataclass(frozen=True)
 class FlightRecord:
     """The runs of a diagnosis and how they were cut.
@@ -95,7 +99,7 @@ class FlightRecord:
     ``absolute_outputs``: per output, True when its runs hold absolute values (a segment of a
     column without start-mean removal), so a constant sensor offset shows in them (in manoeuvre
     deviations it cancels); ``varying_inputs``: the inputs read from a column (not held constant);
-    ``cut``: ``"manoeuvres"`` or ``"segments of X s"``.
+    ``cut``: :data:`MANOEUVRES_CUT` or ``"segments of X s"``.
     """
 
     runs: list[FlightRun]
@@ -128,7 +132,7 @@ def _require_count(runs: Sequence[FlightRun], paths: Sequence[str | Path]) -> No
 
 def read_simulator_record(paths: Sequence[str | Path]) -> FlightRecord:
     """:func:`read_flight_runs` as a record: deviations of the four states, input the elevator."""
-    return FlightRecord(read_flight_runs(paths), {}, (False,) * 4, (0,), "manoeuvres")
+    return FlightRecord(read_flight_runs(paths), {}, (False,) * 4, (0,), MANOEUVRES_CUT)
 
 
 def read_flight_runs(paths: Sequence[str | Path]) -> list[FlightRun]:
@@ -260,7 +264,7 @@ def read_model_runs(
     varying = tuple(
         i for i, name in enumerate(model.inputs) if model.columns[name].constant is None
     )
-    cut = "manoeuvres" if segment_s is None else f"segments of {segment_s:g} s"
+    cut = MANOEUVRES_CUT if segment_s is None else f"segments of {segment_s:g} s"
     return FlightRecord(runs, merged, absolute, varying, cut)
 
 

@@ -26,6 +26,7 @@ import dataclasses
 import numpy as np
 
 from ornitail.core.errors import UserInputError
+from ornitail.gap.flight_data import MANOEUVRES_CUT
 from ornitail.gap.model_spec import BaselineSpec
 from ornitail.gap.pooled_validation import FoldScores
 
@@ -37,11 +38,11 @@ energy and the strongly disturbed ones 4-9 x (docs/gap-diagnosis.md, *Closure on
 
 def validation_weighting_for(spec: BaselineSpec, cut: str) -> str:
     """The weighting the runs get: the baseline file's, or when it names none ``"winsorised"`` for
-    manoeuvres (``cut``, :class:`FlightRecord`) and ``"none"`` for segments. ``"winsorised"`` is
+    manoeuvres (``cut`` is :data:`MANOEUVRES_CUT`) and ``"none"`` for segments. ``"winsorised"`` is
     refused for segments: only runs that repeat one input differ in energy by their disturbance;
     consecutive segments of one record differ by how much the input excites them, and the most
     excited, the most informative, would lose weight."""
-    repeated = cut == "manoeuvres"
+    repeated = cut == MANOEUVRES_CUT
     if spec.validation_weighting is None:
         return "winsorised" if repeated else "none"
     if spec.validation_weighting != "none" and not repeated:

@@ -33,6 +33,8 @@ def test_injected_effect_is_named_with_its_magnitude(case, tmp_path, model_file)
     refit = case.effect == "alpha_bias"  # checked below, on the same diagnosis
     report = _report(case, tmp_path, model_file, refit=refit)
     assert report["split"]["runs_cut_into"] == "segments of 0.5 s"
+    assert report["split"]["validation_weighting"] == "none"
+    assert report["split"]["validation_runs_weighted_down"] == 0
     assert set(report["gap_before"]["per_channel"]) == {"alpha", "q", "a_z"}
     # the model names no Iyy, no Mu, no state w and no output theta: those augmentations are
     # skipped, by reason (its Ma, Za, Mq and Mde carry the derivative-level candidates)
