@@ -3,7 +3,7 @@
 A pump thread takes every block from the DAQ driver. It hands it to the attached :class:`Recorder` (whose
 bounded queue never waits) and offers a decimated copy to a drop-oldest :class:`DisplayFeed`, so a slow or frozen
 display can never cost a recorded sample. While recording it remembers the sample counters of the recent rows, so
-a set point's rows are chosen by when the board *took* them (:meth:`LiveBalance.first_row_sampled_after`), not by
+a set point's rows are chosen by when the board *took* them (:meth:`LiveBalance.row_sampled_at`), not by
 when they reached the host, and a record with counter gaps is recognised (:meth:`LiveBalance.samples_missing_in_rows`).
 :meth:`LiveBalance.measure` averages the next ``record_s`` of full-rate rows (a wind-off tare) and, while
 recording, names the rows it used, so a manual tare or measurement becomes a set point of the run exactly as a
@@ -337,16 +337,11 @@ class LiveBalance:
         if self.error is not None:
             raise self.error
 
-    def first_row_sampled_after(self, samples_since_start: int) -> int | None:
-        """Row index (in the attached recorder) of the first recorded sample the board took at least
-        ``samples_since_start`` samples after the stream's first (counters continue across streams); None until
-        such a sample has been recorded."""
-        found = self.row_sampled_at(samples_since_start)
-        return None if found is None else found[0]
-
     def row_sampled_at(self, samples_since_start: int) -> tuple[int, int] | None:
-        """As :meth:`first_row_sampled_after`, with the samples the board took from ``samples_since_start`` up to
-        that row, which the link lost (0 unless the sample fell into a counter gap); None until recorded."""
+        """Row index (in the attached recorder) of the first recorded sample the board took at least
+        ``samples_since_start`` samples after the stream's first (counters continue across streams), and the
+        samples the board took from ``samples_since_start`` up to that row which the link lost (0 unless the sample
+        fell into a counter gap); None until such a sample has been recorded."""
         with self._lock:
             if self._first_counter is None:
                 return None

@@ -111,24 +111,27 @@ class RecordConditions:
 
 def take_rows(
     context: RecordingContext, recorder: Recorder, count: int
-) -> tuple[int, RecordConditions]:
+) -> tuple[int, int, RecordConditions]:
     """Wait for ``count`` rows sampled from now on, with the stream's alignment held until they arrived; return the
-    first one's row index and the conditions read from then on."""
+    first one's row index, the samples of the record's window the link lost before that row (a counter gap over
+    its start: the rows then begin that much later, at most ``count`` counted) and the conditions read from then
+    on."""
     # Every row of the record is placed on the host clock with the same counter lines (two devices' balance).
     with context.stream.alignment_held():
         context.wait_rig_s(RECORD_START_DELAY_S)
         samples_since_start = context.rig.balance_samples_since_start()
         conditions = RecordConditions(samples_since_start, count)
-        first = None
+        found = None
         rows_seen, rows_seen_at_s = recorder.next_sample_index, context.rig.now_s()
         while True:
             conditions.read(context.rig)
             if conditions.motor_rpms:
                 context.observe_motor(conditions.motor_rpms[-1] > 0.0)
-            if first is None:
-                first = context.stream.first_row_sampled_after(samples_since_start)
-            if first is not None and recorder.next_sample_index >= first + count:
-                return first, conditions
+            if found is None:
+                found = context.stream.row_sampled_at(samples_since_start)
+            if found is not None and recorder.next_sample_index >= found[0] + count:
+                first, lost_before_first = found
+                return first, min(lost_before_first, count), conditions
             if recorder.next_sample_index != rows_seen:
                 rows_seen, rows_seen_at_s = recorder.next_sample_index, context.rig.now_s()
             elif context.rig.now_s() - rows_seen_at_s > ROWS_STALLED_S:
@@ -150,19 +153,25 @@ def record_set_point(
     """Take the ``record_s`` of the stream sampled from now on as this point's rows and journal it.
 
     Rows still in transit (pty, driver queue) when the point settled were sampled before it settled; the board's
-    counter, not the arrival order, decides where the point begins. A record with samples lost inside it (counter
-    gaps: an overloaded link) is taken again, up to ``MAX_RETAKES`` times; what the kept record lost is journalled
-    as ``samples_missing_in_record``. The recorder fills in the record's saturated and over-range row counts.
+    counter, not the arrival order, decides where the point begins. A record with samples lost over its start or
+    inside it (counter gaps: an overloaded link) is taken again, up to ``MAX_RETAKES`` times; what the kept record
+    lost is journalled as ``samples_missing_in_record``. A gap over the start counts because the rows after it
+    were sampled that much later: a board that dropped a whole record's worth put the next point's samples (the
+    motor already running) into a tare's rows. The recorder fills in the record's saturated and over-range row
+    counts.
     """
     stream = context.stream
     count = int(round(point.record_s * sample_rate_hz))
+
+    def take() -> tuple[int, int, RecordConditions]:
+        first, lost_at_start, conditions = take_rows(context, recorder, count)
+        return first, lost_at_start + stream.samples_missing_in_rows(first, count), conditions
+
     retakes = 0
-    first, conditions = take_rows(context, recorder, count)
-    missing = stream.samples_missing_in_rows(first, count)
+    first, missing, conditions = take()
     while missing and retakes < MAX_RETAKES:
         retakes += 1
-        first, conditions = take_rows(context, recorder, count)
-        missing = stream.samples_missing_in_rows(first, count)
+        first, missing, conditions = take()
     record = SetPointRecord(
         plan_point_index=point.index,
         kind=point.kind,

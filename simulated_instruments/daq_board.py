@@ -10,8 +10,8 @@ counters then show the gap), as a real board's FIFO would.
 Fault injection (for tests): :meth:`inject_garbage`, :meth:`truncate_next_frame`,
 :meth:`drop_samples`, :meth:`corrupt_next_crc`, :meth:`unplug` act on the next block written;
 :meth:`hold_gauge_at_rail` (a channel stuck at the ADC limit, over-range bit set) and
-:meth:`drop_periodically` (an overloaded link losing samples) start with the next block and last for a
-number of samples or until released.
+:meth:`drop_periodically` (an overloaded link losing samples) and :meth:`overflow_fifo` (one long stall
+of the host) start with the next block and last for a number of samples or until released.
 """
 
 from __future__ import annotations
@@ -101,6 +101,7 @@ class SimulatedDaqBoard(SimulatedDevice):
         self._rail_holds: dict[int, list[int | None]] = {}
         # (every n samples taken, drop the first k of them)
         self._periodic_drop: tuple[int, int] | None = None
+        self._fifo_overflow_left = 0  # samples still to be lost to an injected FIFO overflow
         self._samples_taken = 0
         self._prepare_thread("simulated DAQ board")
         self._streaming = False
@@ -168,6 +169,14 @@ class SimulatedDaqBoard(SimulatedDevice):
             )
         with self._lock:
             self._periodic_drop = (int(every_samples), int(drop_samples))
+
+    def overflow_fifo(self, samples: int) -> None:
+        """The next ``samples`` samples taken are never sent (counters keep counting them): one stall of the
+        host long enough to overflow the board's FIFO, as one counter gap in the stream."""
+        if samples < 1:
+            raise ValueError(f"samples {samples} must be at least 1")
+        with self._lock:
+            self._fifo_overflow_left = int(samples)
 
     def stop_dropping(self) -> None:
         """End :meth:`drop_periodically` from the next block on."""
@@ -280,15 +289,19 @@ class SimulatedDaqBoard(SimulatedDevice):
             self._faults.clear()
             self._apply_rail_holds(counts, status)
             periodic_drop = self._periodic_drop
+            overflow = min(self._fifo_overflow_left, due)
+            self._fifo_overflow_left -= overflow
         dropped = sum(int(value) for kind, value in faults if kind == "drop")
         if dropped:  # the skipped counters are simply never sent
             counters = counters + dropped
         self._next_counter = int(counters[-1]) + 1
         taken = self._samples_taken + np.arange(due, dtype=np.int64)
         self._samples_taken += due
-        if periodic_drop is not None:  # taken (counted) but never sent
-            every, drop = periodic_drop
-            sent = taken % every >= drop
+        if periodic_drop is not None or overflow:  # taken (counted) but never sent
+            sent = np.arange(due) >= overflow
+            if periodic_drop is not None:
+                every, drop = periodic_drop
+                sent &= taken % every >= drop
             counters, counts, status = counters[sent], counts[sent], status[sent]
             self.samples_dropped_by_board += due - int(np.count_nonzero(sent))
             due = int(np.count_nonzero(sent))

@@ -230,6 +230,32 @@ def test_a_point_lossy_through_its_retakes_ends_the_sweep_incomplete_and_resume_
     assert "nothing to do" in again.message
 
 
+def test_a_record_whose_start_fell_into_a_counter_gap_is_taken_again(simulated_rig, plan, tmp_path):
+    # One host stall that overflowed the board's FIFO over a tare's start. The first row after the gap was
+    # sampled a whole gap later than the record's window: under load in stop 43's CI such a gap spanned the next
+    # point's start, and a tare's rows held the motor running (processing then found no Hall edge in the
+    # measurement that shared them). The window's samples lost before its first row count as missing, so the
+    # record is taken again. The gap (12 s of rig time, 2 s of wall time at 6 x) is long enough that the sweep
+    # reads where the record begins inside it even on a slow host, and shorter than the 30 s after which a silent
+    # stream counts as failed.
+    board = simulated_rig.simulators.daq_board
+    target = next(p for p in plan.set_points if p.kind == "tare" and p.tail_attached)
+    gap_samples = 20 * RECORD_ROWS
+
+    def on_event(event):
+        point = event.set_point
+        if point is not None and point.index == target.index and event.stage == "settled":
+            board.overflow_fifo(gap_samples)
+
+    result = run_sweep(plan, simulated_rig, tmp_path / "data", on_event=on_event)
+    assert result.status == "completed", result.message
+    tailed = load_recording(result.run_directories[0])
+    assert sum(gap.missing_samples for gap in tailed.counter_gaps()) >= gap_samples
+    (kept,) = [r for r in tailed.set_points if r.plan_point_index == target.index]
+    assert kept.extra["retakes"] == 1 and kept.samples_missing_in_record == 0
+    assert kept.last_sample_index - kept.first_sample_index + 1 == RECORD_ROWS
+
+
 # 20 k frames/s (2 kHz x 10): no link loss on a loaded machine
 @pytest.mark.parametrize("simulated_time_scale", [10.0])
 def test_a_catalog_locked_through_the_whole_sweep_costs_no_sample_and_catches_up(
