@@ -69,9 +69,9 @@ def realities_figure(scores: dict[str, dict], title: str) -> plt.Figure:
                 va="center",
                 fontsize=8,
             )
+        axis.set_ylim(-0.03, 1.03)
         _target_line(axis, target, f"{side} {target:.2f}")
         _part_axis(axis, parts, label)
-        axis.set_ylim(-0.03, 1.03)
     axes[0].set_ylabel("share of cases\n(95 % Wilson interval)")
     _magnitude_panel(axes[-1], scores, parts)
     figure.suptitle(title, fontsize=9)
@@ -99,20 +99,30 @@ def _magnitude_panel(axis: plt.Axes, scores: dict[str, dict], parts: list[str]) 
             ha="center",
             fontsize=8,
         )
+    largest_percent = [
+        100.0 * scores[part]["magnitude_error_max"]
+        for part in parts
+        if scores[part]["magnitude_error_max"] is not None
+    ]
+    # room above the tallest bar's label for the target's name
+    axis.set_ylim(0.0, 1.3 * max([MAGNITUDE_TARGET_PERCENT, *largest_percent]))
     _target_line(axis, MAGNITUDE_TARGET_PERCENT, "semi-real: at most 20 %")
     _part_axis(axis, parts, "magnitude error of named effects")
-    axis.set_ylim(bottom=0.0)
     axis.set_ylabel("error (%): median (dot), largest (bar)")
 
 
 def _target_line(axis: plt.Axes, target: float, text: str) -> None:
+    """The target as a dashed line, named in the corner of the panel on the far side of the line from it (the
+    points sit near a target they meet or miss narrowly, and a name beside the line covered them)."""
     axis.axhline(target, color="tab:red", linestyle="--", linewidth=1)
-    axis.annotate(
-        text,
-        (0.02, target),
-        xycoords=("axes fraction", "data"),
-        textcoords="offset points",
-        xytext=(0, 2),
+    bottom, top = axis.get_ylim()
+    high = (target - bottom) / (top - bottom) > 0.5
+    axis.text(
+        0.03,
+        0.03 if high else 0.97,
+        f"dashed: {text}",
+        transform=axis.transAxes,
+        va="bottom" if high else "top",
         color="tab:red",
         fontsize=7,
     )
@@ -120,7 +130,7 @@ def _target_line(axis: plt.Axes, target: float, text: str) -> None:
 
 def _part_axis(axis: plt.Axes, parts: list[str], title: str) -> None:
     axis.set_xticks(range(len(parts)), [PARTS[part] for part in parts], fontsize=8)
-    axis.set_xlim(-0.5, len(parts) - 0.5)
+    axis.set_xlim(-0.5, len(parts) - 0.25)  # room for the last point's count beside it
     axis.set_title(title, fontsize=8)
     axis.grid(axis="y", alpha=0.3)
 
