@@ -176,13 +176,11 @@ def test_the_figure_puts_each_parts_rate_and_interval_against_the_issues_targets
     ]
     assert targets == [[0.05], [0.95], [0.90], [0.90], [20.0]]
     # each named in the panel's corner on the far side of its line (points near a target stay clear of it)
-    label_heights = [
-        next(text for text in axis.texts if text.get_text().startswith("dashed: ")).get_position()[
-            1
-        ]
+    labels = [
+        next(text for text in axis.texts if text.get_text().startswith("dashed: "))
         for axis in (no_effect, in_library)
     ]
-    assert label_heights == [0.97, 0.03]
+    assert [label.get_position()[1] for label in labels] == [0.97, 0.03]
     # a part without cases of a kind says so rather than drawing a point
     texts = [text.get_text() for text in outside.texts]
     assert texts.count("no cases") == 2

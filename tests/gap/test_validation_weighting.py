@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from ornitail.core.errors import UserInputError
+from ornitail.gap.flight_data import MANOEUVRES_CUT
 from ornitail.gap.flight_diagnosis import rule_from_energies
 from ornitail.gap.model_spec import (
     BaselineSpec,
@@ -89,13 +90,13 @@ def test_validation_weighting_is_read_written_and_refused_for_tables(tmp_path):
 
 def test_manoeuvres_are_winsorised_by_default_and_segments_never():
     unnamed = BaselineSpec(kind="linear_model", source="twin.toml")
-    assert validation_weighting_for(unnamed, "manoeuvres") == "winsorised"
+    assert validation_weighting_for(unnamed, MANOEUVRES_CUT) == "winsorised"
     assert validation_weighting_for(unnamed, "segments of 2 s") == "none"
     plain = dataclasses.replace(unnamed, validation_weighting="none")
-    assert validation_weighting_for(plain, "manoeuvres") == "none"
+    assert validation_weighting_for(plain, MANOEUVRES_CUT) == "none"
     assert validation_weighting_for(plain, "segments of 2 s") == "none"
     named = dataclasses.replace(unnamed, validation_weighting="winsorised")
-    assert validation_weighting_for(named, "manoeuvres") == "winsorised"
+    assert validation_weighting_for(named, MANOEUVRES_CUT) == "winsorised"
     with pytest.raises(
         UserInputError, match=r"twin.toml: \[baseline\].validation_weighting"
     ) as raised:
